@@ -1,0 +1,111 @@
+/* The planner: points in, a safe joint path out.
+ *
+ * All state lives in struct qrt_planner, whose size is fixed at compile time
+ * (under 4 MiB at the default 5 degree lattice). The caller owns it:
+ * declare it static, or place it where the board's linker script says.
+ *
+ *   static struct qrt_planner pl;
+ *   struct qrt_params prm;  qrt_params_default(&prm);
+ *   qrt_planner_init(&pl, &prm);                 // arm, margins, lattice
+ *   qrt_planner_add_points(&pl, xyz, n);         // as often as needed
+ *   qrt_planner_build_mask(&pl);                 // points -> C-space mask
+ *   qrt_planner_plan(&pl, &start, &goal, &plan); // mask -> path
+ *
+ * A mask can serve many plans; adding points after building needs another
+ * build (qrt_planner_plan refuses a stale mask with QRT_E_INVALID).
+ */
+#ifndef QRTPLAN_PLANNER_H
+#define QRTPLAN_PLANNER_H
+
+#include <stdint.h>
+
+#include "qrtplan/arm.h"
+#include "qrtplan/config.h"
+#include "qrtplan/lattice.h"
+#include "qrtplan/points.h"
+#include "qrtplan/status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+struct qrt_params {
+    struct qrt_arm arm;
+    double margin_m;          /* workspace margin added to every radius */
+    double cspace_margin_deg; /* Eq. 12 boundary expansion, every joint */
+    double grid_deg;          /* lattice spacing */
+    int use_astar;            /* 1: A* (same cost as Dijkstra), 0: Dijkstra */
+    int simplify;             /* 1: shortcut the lattice path */
+};
+
+/* design.md defaults: margin 0.01 m, C-space margin 0, 5 degrees, A*,
+ * simplification on. */
+void qrt_params_default(struct qrt_params *params);
+
+enum qrt_target_kind { QRT_TARGET_JOINTS = 0, QRT_TARGET_XYZ = 1 };
+
+struct qrt_target {
+    enum qrt_target_kind kind;
+    double value[3]; /* joints in degrees, or an end-effector point in metres */
+};
+
+struct qrt_plan {
+    enum qrt_plan_status status;
+    const char *detail;       /* one English sentence on the status */
+    int n_waypoints;          /* > 0 only when status is QRT_STATUS_OK */
+    double waypoints_deg[QRT_MAX_WAYPOINTS][3];
+    double cost_deg;          /* length of the returned path */
+    double lattice_cost_deg;  /* optimal cost through the lattice, including
+                                 the start and goal connections */
+    double start_deg[3];      /* the start and goal as joints (after IK) */
+    double goal_deg[3];
+    long start_node, goal_node; /* lattice nodes the path enters and leaves */
+    long lattice_path_nodes;
+    long nodes_expanded;
+    long cells_blocked;
+    long points, points_ignored, points_dropped;
+    double voxel_m;           /* 0 while points are exact */
+};
+
+struct qrt_heap_entry {
+    float key;    /* cost so far plus the A* estimate */
+    int32_t node;
+};
+
+struct qrt_planner {
+    struct qrt_params params;
+    struct qrt_points points;
+    struct qrt_mask mask;
+    double radius_m[3]; /* per-link collision radius the mask was built for */
+    long cells_blocked;
+    int mask_stale;     /* points changed since the mask was built */
+    /* search scratch, one entry per lattice node */
+    float dist[QRT_MAX_NODES];
+    struct qrt_heap_entry heap[QRT_MAX_NODES]; /* later holds the path */
+    int32_t heap_pos[QRT_MAX_NODES]; /* -1 unseen, -2 closed */
+    uint8_t parent_dir[QRT_MAX_NODES];
+};
+
+/* QRT_OK; QRT_E_INVALID for non-finite or negative margins, a bad arm or a
+ * bad grid; QRT_E_TOO_BIG when the lattice exceeds this build. */
+int qrt_planner_init(struct qrt_planner *pl, const struct qrt_params *params);
+
+/* Forget every point (the arm and lattice stay). */
+void qrt_planner_clear_points(struct qrt_planner *pl);
+
+/* Add n points (3n doubles, metres, base frame); see points.h. */
+int qrt_planner_add_points(struct qrt_planner *pl, const double *xyz, long n);
+
+/* Convert the points into the C-space mask (paper blocks b-f). */
+int qrt_planner_build_mask(struct qrt_planner *pl);
+
+/* Plan from start to goal on the built mask (paper blocks g-h). Returns
+ * QRT_OK with the outcome in plan->status, or QRT_E_LIMITS when joints are
+ * outside the limits, QRT_E_INVALID for NaN/Inf or a stale mask. */
+int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
+                     const struct qrt_target *goal, struct qrt_plan *plan);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

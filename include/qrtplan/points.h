@@ -1,0 +1,56 @@
+/* The obstacle point table: the inspection points the planner avoids.
+ *
+ * Points are kept exactly while they fit. When more arrive than
+ * QRT_MAX_POINTS, every stored point is moved onto the centre of its voxel
+ * on a grid of QRT_VOXEL_BASE_M, and duplicates merge; if that still
+ * overflows, the voxel edge doubles, up to QRT_VOXEL_MAX_M. A voxel centre
+ * stands for every point in its voxel, so the planner inflates every
+ * collision radius by the voxel's half-diagonal: coarser, never unsafe.
+ * Only when even the coarsest voxels do not fit are points dropped, counted
+ * in `dropped`, and the planner then refuses to plan (QRT_STATUS_CAPACITY).
+ * Points farther from the base than any part of the arm can reach are
+ * ignored (counted in `ignored_far`): they cannot block anything.
+ */
+#ifndef QRTPLAN_POINTS_H
+#define QRTPLAN_POINTS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "qrtplan/config.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define QRT_VOXEL_BASE_M 0.001
+#define QRT_VOXEL_MAX_M 0.064
+#define QRT_POINT_HASH_SLOTS (2L * QRT_MAX_POINTS)
+
+struct qrt_points {
+    float xyz[QRT_MAX_POINTS][3];
+    uint32_t hash[QRT_POINT_HASH_SLOTS]; /* voxel mode: entry index + 1 */
+    long count;          /* entries in xyz */
+    long received;       /* points passed to qrt_points_add since reset */
+    long ignored_far;    /* beyond reach_m */
+    long dropped;        /* lost to capacity: non-zero means do not plan */
+    double voxel_m;      /* 0 while exact, else the voxel edge in use */
+    double reach_m;      /* points farther than this are ignored */
+};
+
+/* Empty the table. reach_m: points with |p| > reach_m are ignored; pass
+ * the arm's reach plus its largest collision radius (the planner does). */
+void qrt_points_reset(struct qrt_points *pts, double reach_m);
+
+/* Add n points (x, y, z in metres, 3n doubles). Returns QRT_OK, or
+ * QRT_E_INVALID (nothing added) if any coordinate is NaN or infinite. */
+int qrt_points_add(struct qrt_points *pts, const double *xyz, long n);
+
+/* Radius every stored point stands for beyond its stored position: the
+ * voxel's half-diagonal plus the float rounding of the stored position. */
+double qrt_points_inflation_m(const struct qrt_points *pts);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,149 @@
+/* Kinematics of the paper's arm (design.md section 3). */
+#include "qrtplan/arm.h"
+
+#include <math.h>
+
+#include "geom.h"
+#include "qrtplan/status.h"
+
+void qrt_arm_default(struct qrt_arm *arm)
+{
+    static const double links[3] = {0.090, 0.332, 0.538};
+    static const double limits[3][2] = {{-180, 180}, {-40, 180}, {-180, 140}};
+    int i;
+    for (i = 0; i < 3; i++) {
+        arm->link_m[i] = links[i];
+        arm->link_radius_m[i] = 0.02;
+        arm->limit_deg[i][0] = limits[i][0];
+        arm->limit_deg[i][1] = limits[i][1];
+    }
+}
+
+int qrt_arm_validate(const struct qrt_arm *arm)
+{
+    int i;
+    for (i = 0; i < 3; i++) {
+        double lo = arm->limit_deg[i][0], hi = arm->limit_deg[i][1];
+        if (!isfinite(arm->link_m[i]) || arm->link_m[i] <= 0.0 ||
+            arm->link_m[i] > 100.0)
+            return QRT_E_INVALID;
+        if (!isfinite(arm->link_radius_m[i]) || arm->link_radius_m[i] < 0.0 ||
+            arm->link_radius_m[i] > 10.0)
+            return QRT_E_INVALID;
+        if (!isfinite(lo) || !isfinite(hi) || lo > hi)
+            return QRT_E_INVALID;
+        if (lo < -360.0 || hi > 360.0)
+            return QRT_E_INVALID;
+    }
+    if (arm->limit_deg[0][0] < -180.0 || arm->limit_deg[0][1] > 180.0)
+        return QRT_E_INVALID;
+    return QRT_OK;
+}
+
+int qrt_arm_alpha_wraps(const struct qrt_arm *arm)
+{
+    return arm->limit_deg[0][0] == -180.0 && arm->limit_deg[0][1] == 180.0;
+}
+
+int qrt_arm_check_joints(const struct qrt_arm *arm, const double joints_deg[3])
+{
+    int i;
+    for (i = 0; i < 3; i++)
+        if (!isfinite(joints_deg[i]))
+            return QRT_E_INVALID;
+    for (i = 0; i < 3; i++)
+        if (joints_deg[i] < arm->limit_deg[i][0] ||
+            joints_deg[i] > arm->limit_deg[i][1])
+            return QRT_E_LIMITS;
+    return QRT_OK;
+}
+
+void qrt_arm_fk(const struct qrt_arm *arm, const double joints_deg[3],
+                double p[4][3])
+{
+    double a = joints_deg[0] * QRT_DEG, s = joints_deg[1] * QRT_DEG;
+    double e = joints_deg[2] * QRT_DEG;
+    double ca = cos(a), sa = sin(a);
+    double r2 = arm->link_m[1] * cos(s), z2 = arm->link_m[1] * sin(s);
+    double r3 = arm->link_m[2] * cos(s + e), z3 = arm->link_m[2] * sin(s + e);
+    p[0][0] = p[0][1] = p[0][2] = 0.0;
+    p[1][0] = arm->link_m[0] * ca;
+    p[1][1] = arm->link_m[0] * sa;
+    p[1][2] = 0.0;
+    p[2][0] = p[1][0] + r2 * ca;
+    p[2][1] = p[1][1] + r2 * sa;
+    p[2][2] = z2;
+    p[3][0] = p[2][0] + r3 * ca;
+    p[3][1] = p[2][1] + r3 * sa;
+    p[3][2] = z2 + z3;
+}
+
+/* Planar two-link IK for the point (u, z) seen from the shoulder; writes up
+ * to two (sigma, eta) pairs in degrees. */
+static int ik_planar(double l2, double l3, double u, double z,
+                     double out[2][2])
+{
+    double d2 = u * u + z * z;
+    double c = (d2 - l2 * l2 - l3 * l3) / (2.0 * l2 * l3);
+    double eta, sigma;
+    int k, n = 0;
+    if (c > 1.0 + 1e-12 || c < -1.0 - 1e-12)
+        return 0;
+    if (c > 1.0)
+        c = 1.0;
+    if (c < -1.0)
+        c = -1.0;
+    for (k = 0; k < 2; k++) {
+        eta = (k == 0 ? 1.0 : -1.0) * acos(c);
+        sigma = atan2(z, u) - atan2(l3 * sin(eta), l2 + l3 * cos(eta));
+        out[n][0] = qrt_wrap_rad(sigma) / QRT_DEG;
+        out[n][1] = qrt_wrap_rad(eta) / QRT_DEG;
+        n++;
+        if (c == 1.0 || c == -1.0)
+            break; /* both branches coincide */
+    }
+    return n;
+}
+
+int qrt_arm_ik(const struct qrt_arm *arm, const double xyz_m[3],
+               double alpha_hint_deg, double sol_deg[4][3])
+{
+    double rho = hypot(xyz_m[0], xyz_m[1]);
+    double phi = rho > 0.0 ? atan2(xyz_m[1], xyz_m[0]) / QRT_DEG
+                           : alpha_hint_deg;
+    int side, n = 0;
+    for (side = 0; side < 2; side++) {
+        /* alpha toward the point (u = rho - L1) or away (u = -rho - L1) */
+        double alpha = qrt_wrap_deg(phi + (side ? 180.0 : 0.0));
+        double u = (side ? -rho : rho) - arm->link_m[0];
+        double pl[2][2];
+        int k, m = ik_planar(arm->link_m[1], arm->link_m[2], u, xyz_m[2], pl);
+        for (k = 0; k < m; k++) {
+            double q[3];
+            q[0] = alpha;
+            q[1] = pl[k][0];
+            q[2] = pl[k][1];
+            if (alpha == -180.0 && qrt_arm_alpha_wraps(arm))
+                q[0] = 180.0;
+            if (qrt_arm_check_joints(arm, q) == QRT_OK) {
+                sol_deg[n][0] = q[0];
+                sol_deg[n][1] = q[1];
+                sol_deg[n][2] = q[2];
+                n++;
+            }
+        }
+        if (rho == 0.0 && arm->link_m[0] == 0.0)
+            break;
+    }
+    return n;
+}
+
+double qrt_arm_joint_distance(const struct qrt_arm *arm, const double a_deg[3],
+                              const double b_deg[3])
+{
+    double d0 = b_deg[0] - a_deg[0];
+    double d1 = b_deg[1] - a_deg[1], d2 = b_deg[2] - a_deg[2];
+    if (qrt_arm_alpha_wraps(arm))
+        d0 = qrt_wrap_deg(d0);
+    return sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+}

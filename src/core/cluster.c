@@ -1,0 +1,87 @@
+/* Bucketing points into cubes with a chained hash table (no sorting, no
+ * allocation: the caller lends the scratch). */
+#include "cluster.h"
+
+#include <math.h>
+
+#include "geom.h"
+
+static long table_size(long n)
+{
+    long h = 16;
+    while (h < 2 * n)
+        h *= 2;
+    return h;
+}
+
+long qrt_cluster_scratch_len(long n)
+{
+    return table_size(n) + n;
+}
+
+static void cube_of(const float p[3], double inv_cell, long key[3])
+{
+    int k;
+    for (k = 0; k < 3; k++)
+        key[k] = qrt_floor((double)p[k] * inv_cell);
+}
+
+static long slot_of(const long key[3], long size)
+{
+    uint64_t h = (uint64_t)key[0] * 0x9E3779B97F4A7C15ull;
+    h ^= (uint64_t)key[1] * 0xC2B2AE3D27D4EB4Full + (h >> 31);
+    h ^= (uint64_t)key[2] * 0x165667B19E3779F9ull + (h >> 29);
+    h ^= h >> 32;
+    return (long)(h & (uint64_t)(size - 1));
+}
+
+void qrt_cluster_points(const float (*pts)[3], long n, double cell_m,
+                        int max_members, int32_t *scratch,
+                        qrt_cluster_visit visit, void *ctx)
+{
+    long size = table_size(n), i, s;
+    int32_t *head = scratch, *next = scratch + size;
+    int32_t members[64];
+    double inv_cell = 1.0 / cell_m;
+    if (max_members > 64)
+        max_members = 64;
+    for (s = 0; s < size; s++)
+        head[s] = -1;
+    for (i = 0; i < n; i++) {
+        long key[3];
+        cube_of(pts[i], inv_cell, key);
+        s = slot_of(key, size);
+        next[i] = head[s];
+        head[s] = (int32_t)i;
+    }
+    /* A slot's chain may hold several cubes: take the first entry's cube,
+     * unlink all its entries, visit them, and repeat until the chain is
+     * empty. */
+    for (s = 0; s < size; s++)
+        while (head[s] >= 0) {
+            long want[3], prev = -1, e = head[s];
+            int m = 0;
+            cube_of(pts[head[s]], inv_cell, want);
+            while (e >= 0) {
+                long key[3], nxt = next[e];
+                cube_of(pts[e], inv_cell, key);
+                if (key[0] == want[0] && key[1] == want[1] &&
+                    key[2] == want[2]) {
+                    if (prev < 0)
+                        head[s] = (int32_t)nxt;
+                    else
+                        next[prev] = (int32_t)nxt;
+                    members[m++] = (int32_t)e;
+                    if (m == max_members) {
+                        visit(ctx, members, m);
+                        m = 0;
+                    }
+                } else {
+                    prev = e;
+                }
+                e = nxt;
+            }
+            if (m > 0)
+                visit(ctx, members, m);
+        }
+}

@@ -1,0 +1,20 @@
+/* Grouping nearby points, so the raster can share work among them.
+ * Internal. */
+#ifndef QRT_CORE_CLUSTER_H
+#define QRT_CORE_CLUSTER_H
+
+#include <stdint.h>
+
+typedef void (*qrt_cluster_visit)(void *ctx, const int32_t *members, int m);
+
+/* Scratch entries qrt_cluster_points needs for n points. */
+long qrt_cluster_scratch_len(long n);
+
+/* Call visit once per group of points that share a cube of edge cell_m
+ * (a cube's points come in groups of at most max_members), each point in
+ * exactly one group. scratch holds qrt_cluster_scratch_len(n) entries. */
+void qrt_cluster_points(const float (*pts)[3], long n, double cell_m,
+                        int max_members, int32_t *scratch,
+                        qrt_cluster_visit visit, void *ctx);
+
+#endif

@@ -1,0 +1,33 @@
+/* Certifying straight joint-space motions. Internal. */
+#ifndef QRT_CORE_MOTION_H
+#define QRT_CORE_MOTION_H
+
+#include "qrtplan/arm.h"
+#include "qrtplan/lattice.h"
+#include "qrtplan/points.h"
+
+/* Joint step from a to b in degrees: alpha the short way round, in
+ * (-180, 180], when the lattice wraps (design.md section 4). */
+void qrt_motion_delta(const struct qrt_lattice *lat, const double a_deg[3],
+                      const double b_deg[3], double d_deg[3]);
+
+/* 1 if every configuration on the straight motion a -> b lies in the cell
+ * of a free lattice node (so collides with nothing), else 0. */
+int qrt_motion_free_on_mask(const struct qrt_mask *mask, const double a_deg[3],
+                            const double b_deg[3]);
+
+/* Smallest clearance (distance minus collision radius, metres) between the
+ * arm at q_deg and the points; a large value when there are none. */
+double qrt_clearance(const struct qrt_arm *arm, const double radius_m[3],
+                     const struct qrt_points *pts, const double q_deg[3]);
+
+/* 1 if the motion a -> b is proved free against the points themselves by
+ * conservative advancement (each step shorter than the clearance divided by
+ * how fast any point of the arm can move), else 0 (also when it would take
+ * more than max_steps steps). */
+int qrt_motion_free_exact(const struct qrt_arm *arm, const double radius_m[3],
+                          const struct qrt_points *pts,
+                          const struct qrt_lattice *lat, const double a_deg[3],
+                          const double b_deg[3], int max_steps);
+
+#endif

@@ -1,0 +1,459 @@
+/* The planner: targets to joints, connections to the lattice, search,
+ * and path simplification (paper blocks g and h). */
+#include "qrtplan/planner.h"
+
+#include <math.h>
+
+#include "cluster.h"
+#include "geom.h"
+#include "motion.h"
+#include "raster.h"
+#include "search.h"
+
+/* Steps allowed when proving a start or goal connection against the raw
+ * points; a connection that needs more is refused, never assumed. */
+#define EXACT_MAX_STEPS 1000
+
+void qrt_params_default(struct qrt_params *params)
+{
+    qrt_arm_default(&params->arm);
+    params->margin_m = 0.01;
+    params->cspace_margin_deg = 0.0;
+    params->grid_deg = 5.0;
+    params->use_astar = 1;
+    params->simplify = 1;
+}
+
+static void copy_joints(double dst[3], const double src[3])
+{
+    dst[0] = src[0];
+    dst[1] = src[1];
+    dst[2] = src[2];
+}
+
+static double arm_reach(const struct qrt_arm *arm)
+{
+    return arm->link_m[0] + arm->link_m[1] + arm->link_m[2];
+}
+
+int qrt_planner_init(struct qrt_planner *pl, const struct qrt_params *params)
+{
+    const struct qrt_arm *arm = &params->arm;
+    double rmax;
+    int rc, k;
+    if (qrt_arm_validate(arm) != QRT_OK)
+        return QRT_E_INVALID;
+    if (!isfinite(params->margin_m) || params->margin_m < 0.0 ||
+        params->margin_m > 10.0)
+        return QRT_E_INVALID;
+    if (!isfinite(params->cspace_margin_deg) ||
+        params->cspace_margin_deg < 0.0 || params->cspace_margin_deg > 45.0)
+        return QRT_E_INVALID;
+    rc = qrt_lattice_init(&pl->mask.lat, arm, params->grid_deg);
+    if (rc != QRT_OK)
+        return rc;
+    pl->params = *params;
+    rmax = 0.0;
+    for (k = 0; k < 3; k++)
+        if (arm->link_radius_m[k] > rmax)
+            rmax = arm->link_radius_m[k];
+    qrt_points_reset(&pl->points, arm_reach(arm) + rmax + params->margin_m);
+    pl->mask_stale = 1;
+    pl->cells_blocked = 0;
+    return QRT_OK;
+}
+
+void qrt_planner_clear_points(struct qrt_planner *pl)
+{
+    qrt_points_reset(&pl->points, pl->points.reach_m);
+    pl->mask_stale = 1;
+}
+
+int qrt_planner_add_points(struct qrt_planner *pl, const double *xyz, long n)
+{
+    int rc = qrt_points_add(&pl->points, xyz, n);
+    if (rc == QRT_OK && n > 0)
+        pl->mask_stale = 1;
+    return rc;
+}
+
+/* Edge of the cubes that group points for the raster: larger groups share
+ * more work, but their bounding balls are less often already covered. */
+#ifndef CLUSTER_CELL_M
+#define CLUSTER_CELL_M 0.03
+#endif
+
+struct cluster_ctx {
+    const struct qrt_raster *raster;
+    const float (*pts)[3];
+};
+
+static void raster_cluster(void *ctx, const int32_t *members, int m)
+{
+    const struct cluster_ctx *c = (const struct cluster_ctx *)ctx;
+    qrt_raster_cluster(c->raster, c->pts, members, m);
+}
+
+int qrt_planner_build_mask(struct qrt_planner *pl)
+{
+    struct qrt_raster r;
+    double inflation = qrt_points_inflation_m(&pl->points);
+    long i;
+    int k;
+    for (k = 0; k < 3; k++)
+        pl->radius_m[k] = pl->params.arm.link_radius_m[k] +
+                          pl->params.margin_m + inflation;
+    qrt_raster_begin(&r, &pl->mask, &pl->params.arm, pl->radius_m,
+                     pl->params.cspace_margin_deg);
+    /* the search's heap_pos is idle until the next search: lend it */
+    if (qrt_cluster_scratch_len(pl->points.count) <= QRT_MAX_NODES) {
+        struct cluster_ctx ctx;
+        ctx.raster = &r;
+        ctx.pts = (const float(*)[3])pl->points.xyz;
+        qrt_cluster_points(ctx.pts, pl->points.count, CLUSTER_CELL_M,
+                           QRT_CLUSTER_MAX, pl->heap_pos, raster_cluster,
+                           &ctx);
+    } else {
+        for (i = 0; i < pl->points.count; i++) {
+            double p[3];
+            p[0] = pl->points.xyz[i][0];
+            p[1] = pl->points.xyz[i][1];
+            p[2] = pl->points.xyz[i][2];
+            qrt_raster_point(&r, p);
+        }
+    }
+    pl->cells_blocked = qrt_mask_count_blocked(&pl->mask);
+    pl->mask_stale = 0;
+    return QRT_OK;
+}
+
+/* Collision radii for checks against the raw points: the C-space margin
+ * (Eq. 12) becomes the distance any arm point can move when every joint
+ * turns by that margin. */
+static void exact_radii(const struct qrt_planner *pl, double radius[3])
+{
+    const double *l = pl->params.arm.link_m;
+    double shift = pl->params.cspace_margin_deg * QRT_DEG *
+                   (arm_reach(&pl->params.arm) + (l[1] + l[2]) + l[2]);
+    int k;
+    for (k = 0; k < 3; k++)
+        radius[k] = pl->radius_m[k] + shift;
+}
+
+/* Add node ijk (if inside the lattice, free, new, and reachable from q by
+ * a motion proved safe) to ends. */
+static void try_end(struct qrt_planner *pl, const double q[3], int ijk[3],
+                    const double radius[3], struct qrt_ends *ends)
+{
+    const struct qrt_lattice *lat = &pl->mask.lat;
+    double node_deg[3];
+    long node;
+    int j;
+    if (ends->count >= QRT_MAX_ENDS)
+        return;
+    if (lat->alpha_wraps)
+        ijk[0] = ((ijk[0] % lat->n[0]) + lat->n[0]) % lat->n[0];
+    for (j = 0; j < 3; j++)
+        if (ijk[j] < 0 || ijk[j] >= lat->n[j])
+            return;
+    if (qrt_mask_blocked(&pl->mask, ijk))
+        return;
+    node = qrt_lattice_index(lat, ijk);
+    for (j = 0; j < ends->count; j++)
+        if (ends->node[j] == node)
+            return;
+    qrt_lattice_joints(lat, ijk, node_deg);
+    if (!qrt_motion_free_on_mask(&pl->mask, q, node_deg) &&
+        !qrt_motion_free_exact(&pl->params.arm, radius, &pl->points, lat, q,
+                               node_deg, EXACT_MAX_STEPS))
+        return;
+    ends->node[ends->count] = node;
+    ends->cost[ends->count] =
+        qrt_arm_joint_distance(&pl->params.arm, q, node_deg);
+    ends->count++;
+}
+
+/* Lattice nodes that q can be joined to: the corners of the grid cell
+ * holding q, or, when none of those is free and reachable (q close to an
+ * obstacle), the 26 neighbours of its nearest node. */
+static void collect_ends(struct qrt_planner *pl, const double q[3],
+                         struct qrt_ends *ends)
+{
+    const struct qrt_lattice *lat = &pl->mask.lat;
+    double radius[3], x[3];
+    int lo[3], near[3], j, c;
+    exact_radii(pl, radius);
+    ends->count = 0;
+    for (j = 0; j < 3; j++) {
+        x[j] = (q[j] - lat->lo_deg[j]) / lat->grid_deg;
+        lo[j] = (int)floor(x[j]);
+        near[j] = (int)floor(x[j] + 0.5);
+    }
+    for (c = 0; c < 8; c++) {
+        int ijk[3];
+        for (j = 0; j < 3; j++)
+            ijk[j] = lo[j] + ((c >> j) & 1);
+        /* a corner q sits on needs no second copy one cell further */
+        if ((c & 1 && x[0] == lo[0]) || (c & 2 && x[1] == lo[1]) ||
+            (c & 4 && x[2] == lo[2]))
+            continue;
+        try_end(pl, q, ijk, radius, ends);
+    }
+    for (c = 0; c < 27 && ends->count == 0; c++) {
+        int ijk[3] = {near[0] + c / 9 - 1, near[1] + (c / 3) % 3 - 1,
+                      near[2] + c % 3 - 1};
+        try_end(pl, q, ijk, radius, ends);
+    }
+}
+
+enum end_outcome { END_OK, END_UNREACHABLE, END_COLLIDES, END_STRANDED };
+
+/* Turn a start or goal into joints and its lattice connections. For an
+ * end-effector point every IK branch is tried, nearest to ref first. */
+static enum end_outcome resolve_end(struct qrt_planner *pl,
+                                    const struct qrt_target *t,
+                                    const double ref[3], double q[3],
+                                    struct qrt_ends *ends)
+{
+    double sols[4][3], dist[4], radius[3];
+    int order[4] = {0, 1, 2, 3}, n, i, k, any_free = 0;
+    exact_radii(pl, radius);
+    if (t->kind == QRT_TARGET_JOINTS) {
+        n = 1;
+        for (k = 0; k < 3; k++)
+            sols[0][k] = t->value[k];
+    } else {
+        n = qrt_arm_ik(&pl->params.arm, t->value, ref[0], sols);
+        if (n == 0)
+            return END_UNREACHABLE;
+    }
+    for (i = 0; i < n; i++) {
+        order[i] = i;
+        dist[i] = qrt_arm_joint_distance(&pl->params.arm, ref, sols[i]);
+    }
+    for (i = 1; i < n; i++) { /* insertion sort: n <= 4 */
+        int o = order[i], m = i;
+        while (m > 0 && dist[order[m - 1]] > dist[o]) {
+            order[m] = order[m - 1];
+            m--;
+        }
+        order[m] = o;
+    }
+    for (i = 0; i < n; i++) {
+        const double *s = sols[order[i]];
+        /* a free cell proves s free; only near obstacles measure it */
+        if (!qrt_motion_free_on_mask(&pl->mask, s, s) &&
+            qrt_clearance(&pl->params.arm, radius, &pl->points, s) <= 0.0)
+            continue;
+        any_free = 1;
+        collect_ends(pl, s, ends);
+        if (ends->count > 0) {
+            copy_joints(q, s);
+            return END_OK;
+        }
+    }
+    copy_joints(q, sols[order[0]]);
+    return any_free ? END_STRANDED : END_COLLIDES;
+}
+
+static int check_target(const struct qrt_arm *arm, const struct qrt_target *t)
+{
+    int k;
+    if (t->kind != QRT_TARGET_JOINTS && t->kind != QRT_TARGET_XYZ)
+        return QRT_E_INVALID;
+    for (k = 0; k < 3; k++)
+        if (!isfinite(t->value[k]))
+            return QRT_E_INVALID;
+    if (t->kind == QRT_TARGET_JOINTS)
+        return qrt_arm_check_joints(arm, t->value);
+    return QRT_OK;
+}
+
+static void set_status(struct qrt_plan *plan, enum qrt_plan_status status,
+                       const char *detail)
+{
+    plan->status = status;
+    plan->detail = detail;
+}
+
+/* Waypoint i of the unsimplified route: start, lattice nodes, goal. */
+static void route_point(const struct qrt_planner *pl, const double s[3],
+                        const double g[3], long len, long i, double out[3])
+{
+    int ijk[3];
+    if (i > 0 && i <= len) {
+        qrt_lattice_coords(&pl->mask.lat, pl->heap[i - 1].node, ijk);
+        qrt_lattice_joints(&pl->mask.lat, ijk, out);
+        return;
+    }
+    copy_joints(out, i == 0 ? s : g);
+}
+
+/* Append w to the plan, merging it with a coincident last waypoint (the
+ * later one wins, so the goal is kept exactly as given). */
+static int append_waypoint(const struct qrt_planner *pl, struct qrt_plan *plan,
+                           const double w[3], int is_last)
+{
+    int n = plan->n_waypoints;
+    if (n > 0 && qrt_arm_joint_distance(&pl->params.arm,
+                                        plan->waypoints_deg[n - 1], w) < 1e-9) {
+        if (n == 1 && !is_last)
+            return 1;
+        if (n > 1)
+            n--;
+    }
+    if (n >= QRT_MAX_WAYPOINTS)
+        return 0;
+    copy_joints(plan->waypoints_deg[n], w);
+    plan->n_waypoints = n + 1;
+    return 1;
+}
+
+/* Greedy string pulling: from each kept waypoint jump to the farthest
+ * later one that the mask proves reachable in a straight motion. The next
+ * route point is always reachable (a lattice edge or a proved connection). */
+static int emit_route(struct qrt_planner *pl, const double s[3],
+                      const double g[3], long len, struct qrt_plan *plan)
+{
+    long last = len + 1, anchor = 0, j;
+    double a[3], w[3];
+    plan->n_waypoints = 0;
+    route_point(pl, s, g, len, 0, a);
+    append_waypoint(pl, plan, a, 0);
+    while (anchor < last) {
+        long next = anchor + 1;
+        if (pl->params.simplify)
+            for (j = anchor + 2; j <= last; j++) {
+                route_point(pl, s, g, len, j, w);
+                if (!qrt_motion_free_on_mask(&pl->mask, a, w))
+                    break;
+                next = j;
+            }
+        route_point(pl, s, g, len, next, a);
+        if (!append_waypoint(pl, plan, a, next == last))
+            return 0;
+        anchor = next;
+    }
+    return 1;
+}
+
+static double route_cost(const struct qrt_planner *pl,
+                         const struct qrt_plan *plan)
+{
+    double cost = 0.0;
+    int i;
+    for (i = 1; i < plan->n_waypoints; i++)
+        cost += qrt_arm_joint_distance(&pl->params.arm,
+                                       plan->waypoints_deg[i - 1],
+                                       plan->waypoints_deg[i]);
+    return cost;
+}
+
+static void reset_plan(const struct qrt_planner *pl, struct qrt_plan *plan)
+{
+    int k;
+    plan->status = QRT_STATUS_NO_PATH;
+    plan->detail = "";
+    plan->n_waypoints = 0;
+    plan->cost_deg = 0.0;
+    plan->lattice_cost_deg = 0.0;
+    for (k = 0; k < 3; k++)
+        plan->start_deg[k] = plan->goal_deg[k] = 0.0;
+    plan->start_node = plan->goal_node = -1;
+    plan->lattice_path_nodes = 0;
+    plan->nodes_expanded = 0;
+    plan->cells_blocked = pl->cells_blocked;
+    plan->points = pl->points.count;
+    plan->points_ignored = pl->points.ignored_far;
+    plan->points_dropped = pl->points.dropped;
+    plan->voxel_m = pl->points.voxel_m;
+}
+
+static const char *end_detail(enum end_outcome o, int is_goal)
+{
+    switch (o) {
+    case END_UNREACHABLE:
+        return is_goal ? "goal point is outside the arm's reach or limits"
+                       : "start point is outside the arm's reach or limits";
+    case END_COLLIDES:
+        return is_goal ? "goal configuration collides with obstacle points"
+                       : "start configuration collides with obstacle points";
+    case END_STRANDED:
+        return is_goal ? "goal is free but no move to it from the lattice "
+                         "can be proved safe"
+                       : "start is free but no move from it to the lattice "
+                         "can be proved safe";
+    case END_OK:
+        break;
+    }
+    return "";
+}
+
+static enum qrt_plan_status end_status(enum end_outcome o, int is_goal)
+{
+    if (o == END_UNREACHABLE)
+        return QRT_STATUS_UNREACHABLE;
+    return is_goal ? QRT_STATUS_GOAL_BLOCKED : QRT_STATUS_START_BLOCKED;
+}
+
+int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
+                     const struct qrt_target *goal, struct qrt_plan *plan)
+{
+    static const double origin[3] = {0.0, 0.0, 0.0};
+    struct qrt_ends seeds, goals;
+    struct qrt_search_result res;
+    enum end_outcome o;
+    const double *ref;
+    double qs[3], qg[3];
+    long len;
+    int rc;
+
+    if ((rc = check_target(&pl->params.arm, start)) != QRT_OK ||
+        (rc = check_target(&pl->params.arm, goal)) != QRT_OK)
+        return rc;
+    if (pl->mask_stale)
+        return QRT_E_INVALID;
+    reset_plan(pl, plan);
+    if (pl->points.dropped > 0) {
+        set_status(plan, QRT_STATUS_CAPACITY,
+                   "more obstacle points than the point table holds");
+        return QRT_OK;
+    }
+    ref = goal->kind == QRT_TARGET_JOINTS ? goal->value : origin;
+    o = resolve_end(pl, start, ref, qs, &seeds);
+    if (o != END_UNREACHABLE)
+        copy_joints(plan->start_deg, qs);
+    if (o != END_OK) {
+        set_status(plan, end_status(o, 0), end_detail(o, 0));
+        return QRT_OK;
+    }
+    o = resolve_end(pl, goal, qs, qg, &goals);
+    if (o != END_UNREACHABLE)
+        copy_joints(plan->goal_deg, qg);
+    if (o != END_OK) {
+        set_status(plan, end_status(o, 1), end_detail(o, 1));
+        return QRT_OK;
+    }
+
+    qrt_search(pl, &seeds, &goals, pl->params.use_astar, &res);
+    plan->nodes_expanded = res.expanded;
+    if (!res.found) {
+        set_status(plan, QRT_STATUS_NO_PATH,
+                   "no collision-free path through the lattice");
+        return QRT_OK;
+    }
+    len = qrt_search_path(pl, res.goal_node);
+    plan->lattice_cost_deg = res.cost;
+    plan->lattice_path_nodes = len;
+    plan->start_node = pl->heap[0].node;
+    plan->goal_node = res.goal_node;
+    if (!emit_route(pl, qs, qg, len, plan)) {
+        plan->n_waypoints = 0;
+        set_status(plan, QRT_STATUS_CAPACITY,
+                   "the path has more waypoints than the plan table holds");
+        return QRT_OK;
+    }
+    plan->cost_deg = route_cost(pl, plan);
+    set_status(plan, QRT_STATUS_OK, "path found");
+    return QRT_OK;
+}

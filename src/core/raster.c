@@ -1,0 +1,439 @@
+/* Conservative T-space -> C-space conversion.
+ *
+ * For each point the paper's analytic reading (Eqs. 1-11) is used: link 1
+ * sweeps a horizontal disc as alpha turns; links 2 and 3 lie in the
+ * vertical half-plane at alpha, where the point is a disc seen from the
+ * shoulder P1. For each alpha node whose cell box can bring the plane
+ * within a radius of the point, the point is replaced by a disc in that
+ * plane that contains every position the point takes relative to the arm
+ * over the box; the angular interval of link 2 (sigma) and of link 3
+ * (psi = sigma + eta) that comes within that disc follows in closed form.
+ * Every approximation makes the blocked set larger, never smaller; see
+ * docs/conservative-raster.md for the argument.
+ */
+#include "raster.h"
+
+#include <math.h>
+
+#include "fastmath.h"
+#include "geom.h"
+
+/* radians added to every angular result: covers rounding and the fast
+ * atan2's error (twice: a centre and a half-width each carry it) */
+#define ANG_EPS (2.0 * QRT_FAST_ANGLE_ERR + 1e-9)
+
+/* Half-width of the set of angles theta for which a segment of length len
+ * from the origin at angle theta comes within reach of a point at distance
+ * d (at angle 0): the set is |theta| <= result. Returns a negative value if
+ * no angle does, a value > pi if every angle does. The distance grows
+ * monotonically with |theta|, which is what makes this an interval. */
+static double sweep_half_width(double d, double len, double reach)
+{
+    double tangent, c;
+    if (d <= reach)
+        return 4.0;
+    tangent = sqrt(d * d - reach * reach);
+    if (tangent <= len) /* asin(reach / d) */
+        return qrt_fast_atan2(reach, tangent) + ANG_EPS;
+    c = (d * d + len * len - reach * reach) / (2.0 * d * len);
+    if (c >= 1.0)
+        return -1.0;
+    return qrt_fast_atan2(sqrt(1.0 - c * c), c) + ANG_EPS; /* acos(c) */
+}
+
+static void set_row_range(uint64_t *row, int a, int b)
+{
+    int w;
+    for (w = a >> 6; w <= (b >> 6); w++) {
+        int lo = w == (a >> 6) ? (a & 63) : 0;
+        int hi = w == (b >> 6) ? (b & 63) : 63;
+        uint64_t bits = (hi == 63 ? ~0ull : ((1ull << (hi + 1)) - 1u)) &
+                        ~((1ull << lo) - 1u);
+        row[w] |= bits;
+    }
+}
+
+/* Index ranges [out[i][0], out[i][1]] of the nodes of axis ax whose angle
+ * lies within half of centre, modulo 2 pi. Returns the count (at most 3):
+ * axes that do not wrap span at most 2 pi (qrt_arm_validate). */
+static int angle_ranges(const struct qrt_axis *ax, double centre, double half,
+                        int out[3][2])
+{
+    const double turn = 2.0 * QRT_PI, inv_turn = 1.0 / (2.0 * QRT_PI);
+    int count = 0;
+    long k, k_end;
+    if (half >= QRT_PI) {
+        out[0][0] = 0;
+        out[0][1] = ax->n - 1;
+        return 1;
+    }
+    if (ax->wraps) {
+        long a = qrt_ceil((centre - half - ax->lo) * ax->inv_g);
+        long b = qrt_floor((centre + half - ax->lo) * ax->inv_g);
+        long ma, mb;
+        if (b < a)
+            return 0;
+        if (b - a + 1 >= ax->n) {
+            out[0][0] = 0;
+            out[0][1] = ax->n - 1;
+            return 1;
+        }
+        ma = ((a % ax->n) + ax->n) % ax->n;
+        mb = ((b % ax->n) + ax->n) % ax->n;
+        if (ma <= mb) {
+            out[0][0] = (int)ma;
+            out[0][1] = (int)mb;
+            return 1;
+        }
+        out[0][0] = (int)ma;
+        out[0][1] = ax->n - 1;
+        out[1][0] = 0;
+        out[1][1] = (int)mb;
+        return 2;
+    }
+    /* the turns k for which centre + k turns can reach the axis */
+    k = qrt_ceil((ax->lo - half - centre) * inv_turn);
+    k_end = qrt_floor((ax->hi - 1e-12 + half - centre) * inv_turn);
+    for (; k <= k_end && count < 3; k++) {
+        double x = (centre + turn * (double)k - ax->lo) * ax->inv_g;
+        double hw = half * ax->inv_g;
+        long fa = qrt_ceil(x - hw), fb = qrt_floor(x + hw);
+        if (fa < 0)
+            fa = 0;
+        if (fb > ax->n - 1)
+            fb = ax->n - 1;
+        if (fb < fa)
+            continue;
+        out[count][0] = (int)fa;
+        out[count][1] = (int)fb;
+        count++;
+    }
+    return count;
+}
+
+static void block_alpha(const struct qrt_raster *r, int ia)
+{
+    const struct qrt_lattice *lat = &r->mask->lat;
+    int is;
+    for (is = 0; is < lat->n[1]; is++)
+        set_row_range(r->mask->rows[ia][is], 0, lat->n[2] - 1);
+}
+
+void qrt_raster_begin(struct qrt_raster *r, struct qrt_mask *mask,
+                      const struct qrt_arm *arm, const double radius_m[3],
+                      double cspace_margin_deg)
+{
+    const struct qrt_lattice *lat = &mask->lat;
+    int a, s, w, j;
+    r->arm = arm;
+    r->mask = mask;
+    r->g = lat->grid_deg * QRT_DEG;
+    r->h = 0.5 * r->g + cspace_margin_deg * QRT_DEG + ANG_EPS;
+    for (j = 0; j < 3; j++) {
+        r->radius_m[j] = radius_m[j];
+        r->lo[j] = lat->lo_deg[j] * QRT_DEG;
+    }
+    r->elbow_shift = 2.0 * arm->link_m[1] * sin(0.5 * r->h) * (1.0 + 1e-12);
+    r->cos_h = cos(r->h);
+    r->sin_h = sin(r->h);
+    for (a = 0; a < lat->n[0]; a++) {
+        double alpha = r->lo[0] + a * r->g;
+        r->alpha_cs[a][0] = cos(alpha);
+        r->alpha_cs[a][1] = sin(alpha);
+    }
+    for (j = 0; j < 3; j++) {
+        r->axis[j].lo = r->lo[j];
+        r->axis[j].inv_g = 1.0 / r->g;
+        r->axis[j].n = lat->n[j];
+        r->axis[j].hi = r->lo[j] + (lat->n[j] - 1) * r->g;
+        r->axis[j].wraps = j == 0 && lat->alpha_wraps;
+    }
+    for (s = 0; s < lat->n[1]; s++) {
+        r->sigma[s] = r->lo[1] + s * r->g;
+        r->elbow[s][0] = arm->link_m[1] * cos(r->sigma[s]);
+        r->elbow[s][1] = arm->link_m[1] * sin(r->sigma[s]);
+    }
+    for (a = 0; a < QRT_MAX_NA; a++)
+        for (s = 0; s < QRT_MAX_NS; s++)
+            for (w = 0; w < QRT_ROW_WORDS; w++)
+                mask->rows[a][s][w] = 0;
+}
+
+/* Link 1 depends on alpha only: a hit blocks whole alpha slabs. */
+static void raster_link1(const struct qrt_raster *r, double rho, double phi,
+                         double z)
+{
+    double rad = r->radius_m[0], reach, w;
+    int ranges[3][2], n, i, ia;
+    if (fabs(z) >= rad)
+        return;
+    reach = sqrt(rad * rad - z * z) + 1e-12;
+    w = sweep_half_width(rho, r->arm->link_m[0], reach);
+    if (w < 0.0)
+        return;
+    n = angle_ranges(&r->axis[0], phi, w + r->h, ranges);
+    for (i = 0; i < n; i++)
+        for (ia = ranges[i][0]; ia <= ranges[i][1]; ia++)
+            block_alpha(r, ia);
+}
+
+/* Extremes of sin and cos of the angle between the point's bearing and
+ * alpha over alpha node ia's box, from the bearing's cosine and sine
+ * relative to the node (no trig calls: rotations by +-h). */
+static void trig_extremes(const struct qrt_raster *r, double cos_c,
+                          double sin_c, double *abs_sin_min, double *cos_min,
+                          double *cos_max)
+{
+    double c0 = cos_c * r->cos_h + sin_c * r->sin_h; /* cos(c - h) */
+    double c1 = cos_c * r->cos_h - sin_c * r->sin_h; /* cos(c + h) */
+    double s0 = fabs(sin_c * r->cos_h - cos_c * r->sin_h);
+    double s1 = fabs(sin_c * r->cos_h + cos_c * r->sin_h);
+    int has_zero = cos_c >= r->cos_h;  /* |c| <= h */
+    int has_pi = cos_c <= -r->cos_h;   /* pi - |c| <= h */
+    *abs_sin_min = (has_zero || has_pi) ? 0.0 : (s0 < s1 ? s0 : s1);
+    *cos_max = has_zero ? 1.0 : (c0 > c1 ? c0 : c1);
+    *cos_min = has_pi ? -1.0 : (c0 < c1 ? c0 : c1);
+}
+
+/* A point (or a cluster's bounding ball) as seen in the arm's vertical
+ * plane over the cell boxes of one alpha node: a disc centred (cu, z) from
+ * the shoulder P1 at distance d, that every link-2 and link-3 contact must
+ * come within reach2 / reach3 of. */
+struct plane {
+    double cu, z, d, reach2, reach3;
+    int hit2, hit3;
+};
+
+/* extra: added to both link radii (a cluster's ball radius). Returns
+ * whether link 2 or link 3 can touch the point at this alpha node. */
+static int plane_at(const struct qrt_raster *r, int ia, const double p[3],
+                    double rho, double extra, struct plane *pl)
+{
+    double cos_c = 1.0, sin_c = 0.0, sin_min, cos_min, cos_max, v, spread;
+    double rad2 = r->radius_m[1] + extra, rad3 = r->radius_m[2] + extra;
+    if (rho > 0.0) { /* the point's bearing relative to the node's alpha */
+        cos_c = (p[0] * r->alpha_cs[ia][0] + p[1] * r->alpha_cs[ia][1]) / rho;
+        sin_c = (p[1] * r->alpha_cs[ia][0] - p[0] * r->alpha_cs[ia][1]) / rho;
+    }
+    trig_extremes(r, cos_c, sin_c, &sin_min, &cos_min, &cos_max);
+    v = rho * sin_min; /* nearest the point comes to the arm's plane */
+    pl->hit2 = v < rad2;
+    pl->hit3 = v < rad3;
+    if (!pl->hit2 && !pl->hit3)
+        return 0;
+    /* the point's radial coordinate seen from P1 spans cu +- spread */
+    pl->cu = 0.5 * rho * (cos_min + cos_max) - r->arm->link_m[0];
+    spread = 0.5 * rho * (cos_max - cos_min);
+    pl->z = p[2];
+    pl->d = sqrt(pl->cu * pl->cu + pl->z * pl->z);
+    pl->reach2 = pl->hit2 ? sqrt(rad2 * rad2 - v * v) + spread : 0.0;
+    pl->reach3 =
+        pl->hit3 ? sqrt(rad3 * rad3 - v * v) + spread + r->elbow_shift : 0.0;
+    return 1;
+}
+
+/* Link 2 (sigma only): rows it can hit are blocked whole. */
+static void raster_link2(const struct qrt_raster *r, int ia,
+                         const struct plane *pl, unsigned char *full)
+{
+    const struct qrt_lattice *lat = &r->mask->lat;
+    double w;
+    int ranges[3][2], n, i, is;
+    if (!pl->hit2)
+        return;
+    w = sweep_half_width(pl->d, r->arm->link_m[1], pl->reach2);
+    if (w < 0.0)
+        return;
+    n = angle_ranges(&r->axis[1], qrt_fast_atan2(pl->z, pl->cu), w + r->h,
+                     ranges);
+    for (i = 0; i < n; i++)
+        for (is = ranges[i][0]; is <= ranges[i][1]; is++) {
+            set_row_range(r->mask->rows[ia][is], 0, lat->n[2] - 1);
+            full[is] = 1;
+        }
+}
+
+/* Sigma rows whose elbow lies within link 3 (plus reach) of the disc. */
+static int link3_rows(const struct qrt_raster *r, const struct plane *pl,
+                      int rows[3][2])
+{
+    const double l2 = r->arm->link_m[1];
+    double far = r->arm->link_m[2] + pl->reach3, c;
+    if (!pl->hit3 || pl->d > l2 + far)
+        return 0;
+    c = pl->d > 0.0 ? (pl->d * pl->d + l2 * l2 - far * far) / (2.0 * pl->d * l2)
+                    : -2.0;
+    if (c <= -1.0) /* law of cosines: every elbow position is near enough */
+        return angle_ranges(&r->axis[1], 0.0, 4.0, rows);
+    return angle_ranges(&r->axis[1], qrt_fast_atan2(pl->z, pl->cu),
+                        qrt_fast_atan2(sqrt(1.0 - c * c), c) + ANG_EPS, rows);
+}
+
+/* Link 3 on sigma row is: the eta nodes whose psi = sigma + eta range
+ * (+-2h over the box) meets the angles where link 3 comes within reach. */
+static int link3_row_ranges(const struct qrt_raster *r, int is,
+                            const struct plane *pl, int ranges[3][2])
+{
+    double du = pl->cu - r->elbow[is][0], dz = pl->z - r->elbow[is][1];
+    double w = sweep_half_width(sqrt(du * du + dz * dz), r->arm->link_m[2],
+                                pl->reach3);
+    if (w < 0.0)
+        return 0;
+    return angle_ranges(&r->axis[2], qrt_fast_atan2(dz, du) - r->sigma[is],
+                        w + 2.0 * r->h, ranges);
+}
+
+static void mark_ranges(uint64_t *row, int ranges[3][2], int n)
+{
+    int i;
+    for (i = 0; i < n; i++)
+        set_row_range(row, ranges[i][0], ranges[i][1]);
+}
+
+static int ranges_blocked(const uint64_t *row, int ranges[3][2], int n)
+{
+    uint64_t want[QRT_ROW_WORDS] = {0};
+    int i, w;
+    for (i = 0; i < n; i++)
+        set_row_range(want, ranges[i][0], ranges[i][1]);
+    for (w = 0; w < QRT_ROW_WORDS; w++)
+        if ((row[w] & want[w]) != want[w])
+            return 0;
+    return 1;
+}
+
+/* Links 2 and 3 of one point for the cell boxes of alpha node ia. */
+static void raster_plane(const struct qrt_raster *r, int ia, double rho,
+                         const double p[3])
+{
+    unsigned char full[QRT_MAX_NS] = {0};
+    struct plane pl;
+    int rows[3][2], nrows, k, is;
+    if (!plane_at(r, ia, p, rho, 0.0, &pl))
+        return;
+    raster_link2(r, ia, &pl, full);
+    nrows = link3_rows(r, &pl, rows);
+    for (k = 0; k < nrows; k++)
+        for (is = rows[k][0]; is <= rows[k][1]; is++) {
+            int ranges[3][2], n;
+            if (full[is])
+                continue;
+            n = link3_row_ranges(r, is, &pl, ranges);
+            mark_ranges(r->mask->rows[ia][is], ranges, n);
+        }
+}
+
+/* Alpha nodes (in up to 4 index ranges) whose boxes can bring the arm's
+ * plane within rmax of a point at (rho, phi): alpha toward the point or
+ * away from it, within the angle whose sine is rmax / rho. */
+static int alpha_window(const struct qrt_raster *r, double rho, double phi,
+                        double rmax, int ranges[6][2])
+{
+    const struct qrt_lattice *lat = &r->mask->lat;
+    int side, n = 0;
+    if (rho <= rmax) {
+        ranges[0][0] = 0;
+        ranges[0][1] = lat->n[0] - 1;
+        return 1;
+    }
+    for (side = 0; side < 2; side++)
+        n += angle_ranges(&r->axis[0], phi + (side ? QRT_PI : 0.0),
+                          asin(rmax / rho) + r->h + ANG_EPS, ranges + n);
+    return n;
+}
+
+static double max_plane_radius(const struct qrt_raster *r)
+{
+    return r->radius_m[1] > r->radius_m[2] ? r->radius_m[1] : r->radius_m[2];
+}
+
+void qrt_raster_point(const struct qrt_raster *r, const double p[3])
+{
+    double rho = sqrt(p[0] * p[0] + p[1] * p[1]);
+    double phi = atan2(p[1], p[0]);
+    int ranges[6][2], n, i, ia;
+    raster_link1(r, rho, phi, p[2]);
+    n = alpha_window(r, rho, phi, max_plane_radius(r), ranges);
+    for (i = 0; i < n; i++)
+        for (ia = ranges[i][0]; ia <= ranges[i][1]; ia++)
+            raster_plane(r, ia, rho, p);
+}
+
+/* A cluster of nearby points shares the link-3 work. Its bounding ball
+ * (centre c, radius ball) touches the arm wherever any member does, so its
+ * raster contains every cell a member truly blocks. On each sigma row the
+ * ball's cells are computed once; when they are all blocked already, no
+ * member can add a cell it truly blocks, and the members are skipped for
+ * that row; otherwise each member is rastered on the row as usual. Dense
+ * clouds block each cell hundreds of times over, so most rows are skipped.
+ */
+void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
+                        const int32_t *members, int m)
+{
+    double c[3], lo[3], hi[3], ball = 0.0, rho_c, phi_c;
+    double mp[QRT_CLUSTER_MAX][3], mrho[QRT_CLUSTER_MAX];
+    struct plane mpl[QRT_CLUSTER_MAX];
+    int ranges[6][2], n, i, j, k, ia;
+
+    for (j = 0; j < m; j++) {
+        for (k = 0; k < 3; k++) {
+            mp[j][k] = pts[members[j]][k];
+            lo[k] = j == 0 || mp[j][k] < lo[k] ? mp[j][k] : lo[k];
+            hi[k] = j == 0 || mp[j][k] > hi[k] ? mp[j][k] : hi[k];
+        }
+        mrho[j] = sqrt(mp[j][0] * mp[j][0] + mp[j][1] * mp[j][1]);
+        raster_link1(r, mrho[j], atan2(mp[j][1], mp[j][0]), mp[j][2]);
+    }
+    if (m == 1) {
+        n = alpha_window(r, mrho[0], atan2(mp[0][1], mp[0][0]),
+                         max_plane_radius(r), ranges);
+        for (i = 0; i < n; i++)
+            for (ia = ranges[i][0]; ia <= ranges[i][1]; ia++)
+                raster_plane(r, ia, mrho[0], mp[0]);
+        return;
+    }
+    for (k = 0; k < 3; k++)
+        c[k] = 0.5 * (lo[k] + hi[k]);
+    for (j = 0; j < m; j++) {
+        double d2 = 0.0;
+        for (k = 0; k < 3; k++)
+            d2 += (mp[j][k] - c[k]) * (mp[j][k] - c[k]);
+        if (d2 > ball)
+            ball = d2;
+    }
+    ball = sqrt(ball) * (1.0 + 1e-12) + 1e-12;
+    rho_c = sqrt(c[0] * c[0] + c[1] * c[1]);
+    phi_c = atan2(c[1], c[0]);
+    n = alpha_window(r, rho_c, phi_c, max_plane_radius(r) + ball, ranges);
+    for (i = 0; i < n; i++)
+        for (ia = ranges[i][0]; ia <= ranges[i][1]; ia++) {
+            unsigned char full[QRT_MAX_NS] = {0};
+            struct plane cpl;
+            int rows[3][2], nrows, is;
+            if (!plane_at(r, ia, c, rho_c, ball, &cpl))
+                continue; /* no member can touch links 2 or 3 here */
+            for (j = 0; j < m; j++)
+                if (plane_at(r, ia, mp[j], mrho[j], 0.0, &mpl[j]))
+                    raster_link2(r, ia, &mpl[j], full);
+                else
+                    mpl[j].hit3 = 0;
+            nrows = link3_rows(r, &cpl, rows);
+            for (k = 0; k < nrows; k++)
+                for (is = rows[k][0]; is <= rows[k][1]; is++) {
+                    uint64_t *row = r->mask->rows[ia][is];
+                    int cr[3][2], nc;
+                    if (full[is])
+                        continue;
+                    nc = link3_row_ranges(r, is, &cpl, cr);
+                    if (nc == 0 || ranges_blocked(row, cr, nc))
+                        continue;
+                    for (j = 0; j < m; j++) {
+                        int mr[3][2], nm;
+                        if (!mpl[j].hit3)
+                            continue;
+                        nm = link3_row_ranges(r, is, &mpl[j], mr);
+                        mark_ranges(row, mr, nm);
+                    }
+                }
+        }
+}

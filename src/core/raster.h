@@ -1,0 +1,53 @@
+/* T-space -> C-space conversion: writes the blocked cells of obstacle
+ * points into the mask (paper blocks b-d, Eqs. 1-12). Internal. */
+#ifndef QRT_CORE_RASTER_H
+#define QRT_CORE_RASTER_H
+
+#include <stdint.h>
+
+#include "qrtplan/arm.h"
+#include "qrtplan/lattice.h"
+
+/* One lattice axis, in radians. */
+struct qrt_axis {
+    double lo, hi, inv_g;
+    int n, wraps;
+};
+
+struct qrt_raster {
+    const struct qrt_arm *arm;
+    struct qrt_mask *mask;
+    double radius_m[3]; /* collision radius per link, margins included */
+    double h;           /* half-width of a cell box, radians */
+    double g;           /* grid, radians */
+    double lo[3];       /* joint value of node 0, radians */
+    double elbow_shift; /* bound on elbow travel inside a box, metres */
+    struct qrt_axis axis[3];
+    double sigma[QRT_MAX_NS];    /* sigma at each node */
+    double elbow[QRT_MAX_NS][2]; /* elbow (u, z) at each sigma node */
+    double cos_h, sin_h;
+    double alpha_cs[QRT_MAX_NA][2]; /* cos, sin of each alpha node */
+};
+
+/* Prepare to raster: clears the mask. radius_m: per-link collision radius
+ * (link radius + margin + point inflation); cspace_margin_deg widens every
+ * cell box (Eq. 12). */
+void qrt_raster_begin(struct qrt_raster *r, struct qrt_mask *mask,
+                      const struct qrt_arm *arm, const double radius_m[3],
+                      double cspace_margin_deg);
+
+/* Mark every node whose cell box holds a configuration that collides with
+ * point p (metres). */
+void qrt_raster_point(const struct qrt_raster *r, const double p[3]);
+
+/* Most points rastered together by qrt_raster_cluster. */
+#define QRT_CLUSTER_MAX 32
+
+/* The same result as qrt_raster_point on each of the m points
+ * pts[members[i]] (m <= QRT_CLUSTER_MAX), with less work when they lie close
+ * together: the cells blocked are a superset of every cell a member truly
+ * blocks, and a subset of what rastering them one by one blocks. */
+void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
+                        const int32_t *members, int m);
+
+#endif

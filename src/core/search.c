@@ -1,0 +1,282 @@
+/* Index-heap Dijkstra and A* over the implicit 26-neighbour lattice.
+ *
+ * No adjacency is stored (the paper's 10^7-entry matrix): a node's
+ * neighbours are its index offsets, alpha wrapping around. The heap holds
+ * node indices with their keys, and heap_pos gives each node's place in it,
+ * so a cheaper route found later lowers the key in place. */
+#include "search.h"
+
+#include <math.h>
+
+#include "geom.h"
+
+void qrt_search_direction(int dir, int offset[3])
+{
+    int code = dir < 13 ? dir : dir + 1; /* skip 13, the node itself */
+    offset[0] = code / 9 - 1;
+    offset[1] = (code / 3) % 3 - 1;
+    offset[2] = code % 3 - 1;
+}
+
+static int heap_less(const struct qrt_heap_entry *a,
+                     const struct qrt_heap_entry *b)
+{
+    /* ties broken by node index, so every platform expands alike */
+    return a->key < b->key || (a->key == b->key && a->node < b->node);
+}
+
+static void heap_place(struct qrt_planner *pl, long i,
+                       struct qrt_heap_entry e)
+{
+    pl->heap[i] = e;
+    pl->heap_pos[e.node] = (int32_t)i;
+}
+
+static void sift_up(struct qrt_planner *pl, long i)
+{
+    struct qrt_heap_entry e = pl->heap[i];
+    while (i > 0) {
+        long parent = (i - 1) / 2;
+        if (!heap_less(&e, &pl->heap[parent]))
+            break;
+        heap_place(pl, i, pl->heap[parent]);
+        i = parent;
+    }
+    heap_place(pl, i, e);
+}
+
+static void sift_down(struct qrt_planner *pl, long i, long size)
+{
+    struct qrt_heap_entry e = pl->heap[i];
+    for (;;) {
+        long c = 2 * i + 1;
+        if (c >= size)
+            break;
+        if (c + 1 < size && heap_less(&pl->heap[c + 1], &pl->heap[c]))
+            c++;
+        if (!heap_less(&pl->heap[c], &e))
+            break;
+        heap_place(pl, i, pl->heap[c]);
+        i = c;
+    }
+    heap_place(pl, i, e);
+}
+
+/* Length of the shortest obstacle-free 26-neighbour path, in cells: the
+ * consistent A* estimate. */
+static double octile(int da, int ds, int de)
+{
+    int t;
+    if (da < ds) {
+        t = da;
+        da = ds;
+        ds = t;
+    }
+    if (ds < de) {
+        t = ds;
+        ds = de;
+        de = t;
+    }
+    if (da < ds) {
+        t = da;
+        da = ds;
+        ds = t;
+    }
+    return sqrt(3.0) * de + sqrt(2.0) * (ds - de) + (double)(da - ds);
+}
+
+static int axis_gap(const struct qrt_lattice *lat, int j, int a, int b)
+{
+    int d = a > b ? a - b : b - a;
+    if (j == 0 && lat->alpha_wraps && lat->n[0] - d < d)
+        d = lat->n[0] - d;
+    return d;
+}
+
+struct estimate {
+    int active;
+    int target[3];
+    double slack; /* how far a goal candidate may lie from target */
+};
+
+static double estimate_at(const struct estimate *est,
+                          const struct qrt_lattice *lat, const int ijk[3])
+{
+    double h;
+    if (!est->active)
+        return 0.0;
+    h = lat->grid_deg * octile(axis_gap(lat, 0, ijk[0], est->target[0]),
+                               axis_gap(lat, 1, ijk[1], est->target[1]),
+                               axis_gap(lat, 2, ijk[2], est->target[2])) -
+        est->slack;
+    return h > 0.0 ? h : 0.0;
+}
+
+static void init_estimate(struct estimate *est, const struct qrt_lattice *lat,
+                          const struct qrt_ends *goals, int use_astar)
+{
+    int i, c[3];
+    est->active = use_astar && goals->count > 0;
+    est->slack = 0.0;
+    if (!est->active)
+        return;
+    qrt_lattice_coords(lat, goals->node[0], est->target);
+    for (i = 1; i < goals->count; i++) {
+        double gap;
+        qrt_lattice_coords(lat, goals->node[i], c);
+        gap = lat->grid_deg * octile(axis_gap(lat, 0, c[0], est->target[0]),
+                                     axis_gap(lat, 1, c[1], est->target[1]),
+                                     axis_gap(lat, 2, c[2], est->target[2]));
+        if (gap > est->slack)
+            est->slack = gap;
+    }
+    /* float keys: stay a hair below the true remaining cost */
+    est->slack += 1e-3 * lat->grid_deg;
+}
+
+static int goal_slot(const struct qrt_ends *goals, long node)
+{
+    int i;
+    for (i = 0; i < goals->count; i++)
+        if (goals->node[i] == node)
+            return i;
+    return -1;
+}
+
+/* Neighbour of ijk in direction off, or -1 outside the lattice. */
+static long neighbour(const struct qrt_lattice *lat, const int ijk[3],
+                      const int off[3], int out[3])
+{
+    int j;
+    for (j = 0; j < 3; j++) {
+        out[j] = ijk[j] + off[j];
+        if (j == 0 && lat->alpha_wraps) {
+            if (out[0] < 0)
+                out[0] += lat->n[0];
+            else if (out[0] >= lat->n[0])
+                out[0] -= lat->n[0];
+        } else if (out[j] < 0 || out[j] >= lat->n[j]) {
+            return -1;
+        }
+    }
+    return qrt_lattice_index(lat, out);
+}
+
+void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
+                const struct qrt_ends *goals, int use_astar,
+                struct qrt_search_result *res)
+{
+    const struct qrt_lattice *lat = &pl->mask.lat;
+    long n_nodes = qrt_lattice_node_count(lat), size = 0, i;
+    float dir_cost[26];
+    double best = HUGE_VAL;
+    struct estimate est;
+    int offsets[26][3], d;
+
+    for (d = 0; d < 26; d++) {
+        int moved;
+        qrt_search_direction(d, offsets[d]);
+        moved = (offsets[d][0] != 0) + (offsets[d][1] != 0) +
+                (offsets[d][2] != 0);
+        dir_cost[d] = (float)(lat->grid_deg * sqrt((double)moved));
+    }
+    init_estimate(&est, lat, goals, use_astar);
+    for (i = 0; i < n_nodes; i++)
+        pl->heap_pos[i] = -1;
+    res->found = 0;
+    res->goal_node = -1;
+    res->cost = HUGE_VAL;
+    res->expanded = 0;
+
+    for (i = 0; i < seeds->count; i++) {
+        long node = seeds->node[i];
+        int ijk[3];
+        struct qrt_heap_entry e;
+        qrt_lattice_coords(lat, node, ijk);
+        if (pl->heap_pos[node] >= 0 && pl->dist[node] <= seeds->cost[i])
+            continue;
+        pl->dist[node] = (float)seeds->cost[i];
+        pl->parent_dir[node] = QRT_NO_PARENT;
+        e.key = (float)(seeds->cost[i] + estimate_at(&est, lat, ijk));
+        e.node = (int32_t)node;
+        if (pl->heap_pos[node] >= 0) {
+            pl->heap[pl->heap_pos[node]] = e;
+            sift_up(pl, pl->heap_pos[node]);
+        } else {
+            pl->heap[size] = e;
+            sift_up(pl, size++);
+        }
+    }
+
+    while (size > 0) {
+        struct qrt_heap_entry top = pl->heap[0];
+        long u = top.node;
+        int ijk[3], slot;
+        if ((double)top.key >= best)
+            break; /* nothing left on the heap can beat the best goal */
+        pl->heap_pos[u] = -2;
+        size--;
+        if (size > 0) {
+            pl->heap[0] = pl->heap[size];
+            sift_down(pl, 0, size);
+        }
+        res->expanded++;
+        slot = goal_slot(goals, u);
+        if (slot >= 0 && (double)pl->dist[u] + goals->cost[slot] < best) {
+            best = (double)pl->dist[u] + goals->cost[slot];
+            res->found = 1;
+            res->goal_node = u;
+            res->cost = best;
+        }
+        qrt_lattice_coords(lat, u, ijk);
+        for (d = 0; d < 26; d++) {
+            int nb[3];
+            long v = neighbour(lat, ijk, offsets[d], nb);
+            float g;
+            struct qrt_heap_entry e;
+            if (v < 0 || pl->heap_pos[v] == -2 || qrt_mask_blocked(&pl->mask, nb))
+                continue;
+            g = pl->dist[u] + dir_cost[d];
+            if (pl->heap_pos[v] >= 0 && pl->dist[v] <= g)
+                continue;
+            pl->dist[v] = g;
+            pl->parent_dir[v] = (uint8_t)d;
+            e.key = (float)((double)g + estimate_at(&est, lat, nb));
+            e.node = (int32_t)v;
+            if (pl->heap_pos[v] >= 0) {
+                pl->heap[pl->heap_pos[v]] = e;
+                sift_up(pl, pl->heap_pos[v]);
+            } else {
+                pl->heap[size] = e;
+                sift_up(pl, size++);
+            }
+        }
+    }
+}
+
+long qrt_search_path(struct qrt_planner *pl, long goal_node)
+{
+    const struct qrt_lattice *lat = &pl->mask.lat;
+    long len = 0, node = goal_node, i;
+    /* walk back from the goal, then reverse in place */
+    for (;;) {
+        int ijk[3], off[3], prev[3], j;
+        unsigned dir = pl->parent_dir[node];
+        pl->heap[len++].node = (int32_t)node;
+        if (dir == QRT_NO_PARENT)
+            break;
+        qrt_lattice_coords(lat, node, ijk);
+        qrt_search_direction((int)dir, off);
+        for (j = 0; j < 3; j++)
+            prev[j] = ijk[j] - off[j];
+        if (lat->alpha_wraps)
+            prev[0] = (prev[0] + lat->n[0]) % lat->n[0];
+        node = qrt_lattice_index(lat, prev);
+    }
+    for (i = 0; i < len / 2; i++) {
+        int32_t t = pl->heap[i].node;
+        pl->heap[i].node = pl->heap[len - 1 - i].node;
+        pl->heap[len - 1 - i].node = t;
+    }
+    return len;
+}

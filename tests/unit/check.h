@@ -1,0 +1,52 @@
+/* Minimal test harness for the core's C unit tests: CHECK counts and
+ * reports, test_done() prints the closing line and gives the exit code. */
+#ifndef QRT_TEST_CHECK_H
+#define QRT_TEST_CHECK_H
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+static int checks_passed, checks_failed;
+
+#define CHECK(cond, ...)                                                    \
+    do {                                                                    \
+        if (cond) {                                                         \
+            checks_passed++;                                                \
+        } else {                                                            \
+            checks_failed++;                                                \
+            fprintf(stderr, "FAIL %s:%d: %s: ", __FILE__, __LINE__, #cond); \
+            fprintf(stderr, __VA_ARGS__);                                   \
+            fputc('\n', stderr);                                            \
+        }                                                                   \
+    } while (0)
+
+static inline int test_done(const char *name)
+{
+    printf("%s: %d passed, %d failed\n", name, checks_passed, checks_failed);
+    return checks_failed ? 1 : 0;
+}
+
+/* Deterministic xorshift random numbers, so every run checks the same
+ * cases unless QRT_SEED says otherwise. */
+static unsigned long long test_rng_state = 0x9E3779B97F4A7C15ull;
+
+static inline void test_seed(unsigned long long fallback)
+{
+    const char *env = getenv("QRT_SEED");
+    test_rng_state = env ? strtoull(env, NULL, 10) : fallback;
+    if (test_rng_state == 0)
+        test_rng_state = 1;
+}
+
+static inline double test_uniform(double lo, double hi)
+{
+    unsigned long long x = test_rng_state;
+    x ^= x << 13;
+    x ^= x >> 7;
+    x ^= x << 17;
+    test_rng_state = x;
+    return lo + (hi - lo) * (double)(x >> 11) * (1.0 / 9007199254740992.0);
+}
+
+#endif

@@ -1,0 +1,92 @@
+/* Certified motions: every motion the mask walk or the conservative
+ * advancement accepts is free when sampled finely with the reference arm,
+ * across the alpha seam too. Uses the core's internal motion.h. */
+#include "../../src/core/motion.h"
+#include "check.h"
+#include "qrtplan/qrtplan.h"
+#include "ref_arm.h"
+
+static struct qrt_planner pl;
+
+static double wrap180(double x)
+{
+    x = fmod(x, 360.0);
+    return x <= -180.0 ? x + 360.0 : (x > 180.0 ? x - 360.0 : x);
+}
+
+static double motion_clearance(const double a[3], const double b[3],
+                               const double *pts, long n,
+                               const double radius[3])
+{
+    double d[3], worst = 1e30, span;
+    int k, steps, j;
+    d[0] = wrap180(b[0] - a[0]);
+    d[1] = b[1] - a[1];
+    d[2] = b[2] - a[2];
+    span = fmax(fabs(d[0]), fmax(fabs(d[1]), fabs(d[2])));
+    steps = (int)ceil(span / 0.02) + 1;
+    for (k = 0; k <= steps; k++) {
+        double q[3];
+        for (j = 0; j < 3; j++)
+            q[j] = a[j] + d[j] * k / steps;
+        worst = fmin(worst, ref_clearance(q, pts, n, radius));
+    }
+    return worst;
+}
+
+int main(void)
+{
+    struct qrt_params prm;
+    double pts[3 * 12], radius[3];
+    int trial, accepted_mask = 0, accepted_exact = 0, i, k;
+    test_seed(31337);
+    for (trial = 0; trial < 40; trial++) {
+        int n = 2 + trial % 10;
+        qrt_params_default(&prm);
+        qrt_planner_init(&pl, &prm);
+        for (i = 0; i < n; i++) {
+            double rho = test_uniform(0.2, 0.95), phi = test_uniform(-3.1, 3.1);
+            pts[3 * i] = rho * cos(phi);
+            pts[3 * i + 1] = rho * sin(phi);
+            pts[3 * i + 2] = test_uniform(-0.4, 0.6);
+        }
+        qrt_planner_add_points(&pl, pts, n);
+        qrt_planner_build_mask(&pl);
+        for (k = 0; k < 3; k++)
+            radius[k] = prm.arm.link_radius_m[k] + prm.margin_m;
+        for (i = 0; i < 200; i++) {
+            double a[3], b[3], len = i % 2 ? 8.0 : 60.0;
+            a[0] = test_uniform(-180, 180);
+            a[1] = test_uniform(-40, 180);
+            a[2] = test_uniform(-180, 140);
+            b[0] = wrap180(a[0] + test_uniform(-len, len));
+            b[1] = fmin(180, fmax(-40, a[1] + test_uniform(-len, len)));
+            b[2] = fmin(140, fmax(-180, a[2] + test_uniform(-len, len)));
+            if (qrt_motion_free_on_mask(&pl.mask, a, b)) {
+                double c = motion_clearance(a, b, pts, n, radius);
+                accepted_mask++;
+                CHECK(c >= 0.0, "mask walk accepted a colliding motion "
+                      "(%g %g %g)->(%g %g %g): %g", a[0], a[1], a[2], b[0],
+                      b[1], b[2], c);
+            }
+            if (i % 4 == 0 &&
+                qrt_motion_free_exact(&prm.arm, pl.radius_m, &pl.points,
+                                      &pl.mask.lat, a, b, 1000)) {
+                double c = motion_clearance(a, b, pts, n, radius);
+                accepted_exact++;
+                CHECK(c >= 0.0, "advancement accepted a colliding motion: %g",
+                      c);
+            }
+        }
+    }
+    printf("motions accepted: mask %d, exact %d\n", accepted_mask,
+           accepted_exact);
+    CHECK(accepted_mask > 1000 && accepted_exact > 200, "too few accepted");
+    {
+        /* the seam: 175 -> -175 is a 10 degree move, not 350 */
+        double a[3] = {175, 0, 0}, b[3] = {-175, 0, 0}, d[3];
+        qrt_motion_delta(&pl.mask.lat, a, b, d);
+        CHECK(fabs(d[0] - 10.0) < 1e-12, "seam step %g", d[0]);
+    }
+    return test_done("test_motion");
+}
