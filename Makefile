@@ -1,0 +1,36 @@
+# Thin front over CMake. `make help` lists the targets.
+BUILD ?= build
+JOBS ?= $(shell nproc 2>/dev/null || echo 2)
+GEN := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
+
+.PHONY: all setup test demo bench clean format help
+
+all:
+	@cmake -S . -B $(BUILD) $(GEN) >/dev/null
+	@cmake --build $(BUILD) -j $(JOBS)
+
+setup:
+	@tools/setup.sh
+
+test: setup
+	@tools/run_tests.sh
+
+demo: setup all
+	@tools/demo.sh
+
+bench: setup all
+	@tools/bench.sh
+
+format:
+	@clang-format -i $$(git ls-files '*.c' '*.h' '*.cpp' '*.hpp')
+
+clean:
+	rm -rf build build-asan build-fuzz
+
+help:
+	@echo "make        build everything into build/ (programs in build/bin/)"
+	@echo "make demo   install what is missing, plan the paper's scenes, draw them (build/demo/)"
+	@echo "make test   install what is missing, run every test: unit, Python, ASan+UBSan, fuzz"
+	@echo "make bench  the paper's Table 5 and larger clouds, timed (build/bench/)"
+	@echo "make format clang-format all C sources"
+	@echo "make clean  remove the build directories"

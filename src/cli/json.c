@@ -1,0 +1,459 @@
+#define _POSIX_C_SOURCE 200809L
+/* Recursive-descent JSON reader; depth is bounded by JSON_MAX_DEPTH. */
+#include "json.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct reader {
+    const char *s;
+    size_t len, pos;
+    char *err;
+    size_t err_len;
+    int failed;
+};
+
+static void fail(struct reader *r, const char *fmt, ...)
+{
+    va_list ap;
+    int n;
+    if (r->failed)
+        return;
+    r->failed = 1;
+    n = snprintf(r->err, r->err_len, "at byte %zu: ", r->pos);
+    va_start(ap, fmt);
+    if (n >= 0 && (size_t)n < r->err_len)
+        vsnprintf(r->err + n, r->err_len - (size_t)n, fmt, ap);
+    va_end(ap);
+}
+
+static void skip_space(struct reader *r)
+{
+    while (r->pos < r->len && (r->s[r->pos] == ' ' || r->s[r->pos] == '\t' ||
+                               r->s[r->pos] == '\n' || r->s[r->pos] == '\r'))
+        r->pos++;
+}
+
+static int peek(struct reader *r)
+{
+    return r->pos < r->len ? (unsigned char)r->s[r->pos] : -1;
+}
+
+static int parse_value(struct reader *r, struct json *out, int depth);
+
+static int parse_literal(struct reader *r, const char *word)
+{
+    size_t n = strlen(word);
+    if (r->len - r->pos < n || memcmp(r->s + r->pos, word, n) != 0) {
+        fail(r, "unexpected character '%c'", r->s[r->pos]);
+        return 0;
+    }
+    r->pos += n;
+    return 1;
+}
+
+static int parse_number(struct reader *r, struct json *out)
+{
+    size_t start = r->pos;
+    char buf[64], *end;
+    /* validate the JSON number grammar before strtod sees it */
+    if (peek(r) == '-')
+        r->pos++;
+    if (peek(r) == '0') {
+        r->pos++;
+    } else if (peek(r) >= '1' && peek(r) <= '9') {
+        while (peek(r) >= '0' && peek(r) <= '9')
+            r->pos++;
+    } else {
+        fail(r, "invalid number");
+        return 0;
+    }
+    if (peek(r) == '.') {
+        r->pos++;
+        if (!(peek(r) >= '0' && peek(r) <= '9')) {
+            fail(r, "invalid number: digit expected after '.'");
+            return 0;
+        }
+        while (peek(r) >= '0' && peek(r) <= '9')
+            r->pos++;
+    }
+    if (peek(r) == 'e' || peek(r) == 'E') {
+        r->pos++;
+        if (peek(r) == '+' || peek(r) == '-')
+            r->pos++;
+        if (!(peek(r) >= '0' && peek(r) <= '9')) {
+            fail(r, "invalid number: digit expected in exponent");
+            return 0;
+        }
+        while (peek(r) >= '0' && peek(r) <= '9')
+            r->pos++;
+    }
+    if (r->pos - start >= sizeof buf) {
+        r->pos = start;
+        fail(r, "number too long");
+        return 0;
+    }
+    memcpy(buf, r->s + start, r->pos - start);
+    buf[r->pos - start] = '\0';
+    errno = 0;
+    out->type = JSON_NUMBER;
+    out->number = strtod(buf, &end);
+    if (!isfinite(out->number)) {
+        r->pos = start;
+        fail(r, "number %s is out of range", buf);
+        return 0;
+    }
+    return 1;
+}
+
+static int hex_digit(int c)
+{
+    if (c >= '0' && c <= '9')
+        return c - '0';
+    if (c >= 'a' && c <= 'f')
+        return c - 'a' + 10;
+    if (c >= 'A' && c <= 'F')
+        return c - 'A' + 10;
+    return -1;
+}
+
+static size_t put_utf8(char *dst, unsigned long cp)
+{
+    if (cp < 0x80) {
+        dst[0] = (char)cp;
+        return 1;
+    }
+    if (cp < 0x800) {
+        dst[0] = (char)(0xC0 | (cp >> 6));
+        dst[1] = (char)(0x80 | (cp & 0x3F));
+        return 2;
+    }
+    if (cp < 0x10000) {
+        dst[0] = (char)(0xE0 | (cp >> 12));
+        dst[1] = (char)(0x80 | ((cp >> 6) & 0x3F));
+        dst[2] = (char)(0x80 | (cp & 0x3F));
+        return 3;
+    }
+    dst[0] = (char)(0xF0 | (cp >> 18));
+    dst[1] = (char)(0x80 | ((cp >> 12) & 0x3F));
+    dst[2] = (char)(0x80 | ((cp >> 6) & 0x3F));
+    dst[3] = (char)(0x80 | (cp & 0x3F));
+    return 4;
+}
+
+static int read_hex4(struct reader *r, unsigned long *cp)
+{
+    int i;
+    *cp = 0;
+    for (i = 0; i < 4; i++) {
+        int h = hex_digit(peek(r));
+        if (h < 0) {
+            fail(r, "invalid \\u escape");
+            return 0;
+        }
+        *cp = *cp * 16 + (unsigned long)h;
+        r->pos++;
+    }
+    return 1;
+}
+
+static char *parse_string(struct reader *r)
+{
+    /* the decoded string is never longer than its source */
+    size_t start = ++r->pos, n = 0;
+    char *buf;
+    while (r->pos < r->len && r->s[r->pos] != '"') {
+        if (r->s[r->pos] == '\\')
+            r->pos++;
+        r->pos++;
+    }
+    if (r->pos >= r->len) {
+        r->pos = start - 1;
+        fail(r, "unterminated string");
+        return NULL;
+    }
+    buf = malloc(r->pos - start + 1);
+    if (!buf) {
+        fail(r, "out of memory");
+        return NULL;
+    }
+    r->pos = start;
+    while (r->s[r->pos] != '"') {
+        unsigned char c = (unsigned char)r->s[r->pos++];
+        unsigned long cp;
+        if (c < 0x20) {
+            r->pos--;
+            fail(r, "control character in string");
+            free(buf);
+            return NULL;
+        }
+        if (c != '\\') {
+            buf[n++] = (char)c;
+            continue;
+        }
+        c = (unsigned char)r->s[r->pos++];
+        switch (c) {
+        case '"': case '\\': case '/':
+            buf[n++] = (char)c;
+            break;
+        case 'b': buf[n++] = '\b'; break;
+        case 'f': buf[n++] = '\f'; break;
+        case 'n': buf[n++] = '\n'; break;
+        case 'r': buf[n++] = '\r'; break;
+        case 't': buf[n++] = '\t'; break;
+        case 'u':
+            if (!read_hex4(r, &cp) || cp == 0 || (cp >= 0xD800 && cp < 0xE000)) {
+                if (!r->failed)
+                    fail(r, "\\u escape not supported here (NUL or surrogate)");
+                free(buf);
+                return NULL;
+            }
+            n += put_utf8(buf + n, cp);
+            break;
+        default:
+            r->pos--;
+            fail(r, "invalid escape '\\%c'", c);
+            free(buf);
+            return NULL;
+        }
+    }
+    r->pos++;
+    buf[n] = '\0';
+    return buf;
+}
+
+/* Append v to a growing array; *cap doubles as needed. */
+static int push(struct reader *r, struct json **items, size_t *count,
+                size_t *cap, const struct json *v)
+{
+    if (*count == *cap) {
+        size_t ncap = *cap ? *cap * 2 : 4;
+        struct json *grown = realloc(*items, ncap * sizeof **items);
+        if (!grown) {
+            fail(r, "out of memory");
+            return 0;
+        }
+        *items = grown;
+        *cap = ncap;
+    }
+    (*items)[(*count)++] = *v;
+    return 1;
+}
+
+static void free_children(struct json *j);
+
+static int parse_array(struct reader *r, struct json *out, int depth)
+{
+    size_t cap = 0;
+    out->type = JSON_ARRAY;
+    r->pos++;
+    skip_space(r);
+    if (peek(r) == ']') {
+        r->pos++;
+        return 1;
+    }
+    for (;;) {
+        struct json v;
+        memset(&v, 0, sizeof v);
+        if (!parse_value(r, &v, depth + 1) ||
+            !push(r, &out->items, &out->count, &cap, &v)) {
+            free_children(&v);
+            return 0;
+        }
+        skip_space(r);
+        if (peek(r) == ',') {
+            r->pos++;
+            continue;
+        }
+        if (peek(r) == ']') {
+            r->pos++;
+            return 1;
+        }
+        fail(r, peek(r) < 0 ? "unexpected end of input in array"
+                            : "expected ',' or ']' in array");
+        return 0;
+    }
+}
+
+static int parse_object(struct reader *r, struct json *out, int depth)
+{
+    size_t cap = 0, key_cap = 0;
+    out->type = JSON_OBJECT;
+    r->pos++;
+    skip_space(r);
+    if (peek(r) == '}') {
+        r->pos++;
+        return 1;
+    }
+    for (;;) {
+        struct json v;
+        char *key;
+        size_t i;
+        skip_space(r);
+        if (peek(r) != '"') {
+            fail(r, peek(r) < 0 ? "unexpected end of input in object"
+                                : "expected a string key");
+            return 0;
+        }
+        key = parse_string(r);
+        if (!key)
+            return 0;
+        for (i = 0; i < out->count; i++)
+            if (strcmp(out->keys[i], key) == 0) {
+                fail(r, "duplicate key \"%s\"", key);
+                free(key);
+                return 0;
+            }
+        if (out->count == key_cap) {
+            size_t ncap = key_cap ? key_cap * 2 : 4;
+            char **grown = realloc(out->keys, ncap * sizeof *grown);
+            if (!grown) {
+                free(key);
+                fail(r, "out of memory");
+                return 0;
+            }
+            out->keys = grown;
+            key_cap = ncap;
+        }
+        skip_space(r);
+        if (peek(r) != ':') {
+            free(key);
+            fail(r, "expected ':' after key");
+            return 0;
+        }
+        r->pos++;
+        memset(&v, 0, sizeof v);
+        if (!parse_value(r, &v, depth + 1)) {
+            free(key);
+            free_children(&v);
+            return 0;
+        }
+        out->keys[out->count] = key;
+        if (!push(r, &out->items, &out->count, &cap, &v)) {
+            free(key);
+            free_children(&v);
+            return 0;
+        }
+        skip_space(r);
+        if (peek(r) == ',') {
+            r->pos++;
+            continue;
+        }
+        if (peek(r) == '}') {
+            r->pos++;
+            return 1;
+        }
+        fail(r, peek(r) < 0 ? "unexpected end of input in object"
+                            : "expected ',' or '}' in object");
+        return 0;
+    }
+}
+
+static int parse_value(struct reader *r, struct json *out, int depth)
+{
+    int c;
+    if (depth > JSON_MAX_DEPTH) {
+        fail(r, "nesting deeper than %d", JSON_MAX_DEPTH);
+        return 0;
+    }
+    skip_space(r);
+    c = peek(r);
+    switch (c) {
+    case -1:
+        fail(r, "unexpected end of input");
+        return 0;
+    case '{':
+        return parse_object(r, out, depth);
+    case '[':
+        return parse_array(r, out, depth);
+    case '"':
+        out->type = JSON_STRING;
+        out->string = parse_string(r);
+        return out->string != NULL;
+    case 't':
+        out->type = JSON_BOOL;
+        out->number = 1;
+        return parse_literal(r, "true");
+    case 'f':
+        out->type = JSON_BOOL;
+        return parse_literal(r, "false");
+    case 'n':
+        out->type = JSON_NULL;
+        return parse_literal(r, "null");
+    default:
+        if (c == '-' || (c >= '0' && c <= '9'))
+            return parse_number(r, out);
+        fail(r, "unexpected character '%c'", c);
+        return 0;
+    }
+}
+
+static void free_children(struct json *j)
+{
+    size_t i;
+    for (i = 0; i < j->count; i++) {
+        free_children(&j->items[i]);
+        if (j->keys)
+            free(j->keys[i]);
+    }
+    free(j->items);
+    free(j->keys);
+    free(j->string);
+}
+
+void json_free(struct json *j)
+{
+    if (!j)
+        return;
+    free_children(j);
+    free(j);
+}
+
+struct json *json_parse(const char *text, size_t len, char *err,
+                        size_t err_len)
+{
+    struct reader r;
+    struct json *root = calloc(1, sizeof *root);
+    r.s = text;
+    r.len = len;
+    r.pos = 0;
+    r.err = err;
+    r.err_len = err_len;
+    r.failed = 0;
+    if (!root) {
+        snprintf(err, err_len, "out of memory");
+        return NULL;
+    }
+    if (parse_value(&r, root, 0)) {
+        skip_space(&r);
+        if (r.pos < r.len)
+            fail(&r, "trailing characters after the document");
+    }
+    if (r.failed) {
+        json_free(root);
+        return NULL;
+    }
+    return root;
+}
+
+const struct json *json_get(const struct json *obj, const char *key)
+{
+    size_t i;
+    if (!obj || obj->type != JSON_OBJECT)
+        return NULL;
+    for (i = 0; i < obj->count; i++)
+        if (strcmp(obj->keys[i], key) == 0)
+            return &obj->items[i];
+    return NULL;
+}
+
+const char *json_type_name(enum json_type t)
+{
+    static const char *const names[] = {"null",   "boolean", "number",
+                                        "string", "array",   "object"};
+    return names[t];
+}

@@ -1,0 +1,311 @@
+/* qrtplan: the planning core on scene files. */
+#define _POSIX_C_SOURCE 200809L
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "gen.h"
+#include "plan_json.h"
+#include "qrtplan/qrtplan.h"
+#include "scene.h"
+
+static const char usage[] =
+    "usage: qrtplan plan SCENE.json [-o PLAN.json] [--dijkstra] [--no-simplify]\n"
+    "       qrtplan mask SCENE.json [-o MASK.json]\n"
+    "       qrtplan gen [--spheres N] [--points K] [--radius R] [--distance D]\n"
+    "                   [--height Z] [--phase DEG] [--start A,S,E] [--goal A,S,E]\n"
+    "                   [--pcd FILE | --pcd-ascii FILE] [-o SCENE.json]\n"
+    "       qrtplan --help | --version\n";
+
+static const char help[] =
+    "\n"
+    "plan   Read a scene (design.md section 5: arm, margins, grid_deg, points\n"
+    "       and/or a PCD points_file, start and goal as joints_deg or xyz_m),\n"
+    "       build the C-space mask and plan. Writes the plan as JSON to PLAN.json\n"
+    "       or stdout. Exit 0 for every well-formed scene, whatever the plan's\n"
+    "       status (ok, no_path, start_blocked, goal_blocked, unreachable,\n"
+    "       capacity); exit 2 with one line on stderr for input it cannot use.\n"
+    "       --dijkstra      plain Dijkstra instead of A* (same cost, more work)\n"
+    "       --no-simplify   return the lattice path without shortcuts\n"
+    "mask   Write the scene's blocked lattice nodes as JSON (index =\n"
+    "       (ia*ns + is)*ne + ie; node joints = lo_deg + i*grid_deg).\n"
+    "gen    Write a scene of the paper's obstacle family (its Eq. 13, Fig. 17):\n"
+    "       N spheres (default 1) of radius R (0.1 m), centres on a circle of\n"
+    "       radius D (0.6 m) around the base at height Z (0 m), the first at\n"
+    "       bearing DEG (180: behind the arm) and the rest every 360/N degrees;\n"
+    "       K points per sphere (1444) as k*k samples of Eq. 13's two angles,\n"
+    "       k = round(sqrt(K)). Start (-100,0,0) and goal (100,0,0) unless\n"
+    "       given. With --pcd the points go to a binary PCD file that the scene\n"
+    "       names in points_file (--pcd-ascii: ASCII PCD).\n";
+
+static int fail(const char *file, const char *msg)
+{
+    if (file)
+        fprintf(stderr, "qrtplan: %s: %s\n", file, msg);
+    else
+        fprintf(stderr, "qrtplan: %s\n", msg);
+    return 2;
+}
+
+static long now_us(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (long)ts.tv_sec * 1000000L + ts.tv_nsec / 1000;
+}
+
+static FILE *open_output(const char *path)
+{
+    return path ? fopen(path, "w") : stdout;
+}
+
+static int close_output(FILE *f, const char *path)
+{
+    int bad = ferror(f);
+    if (path)
+        bad |= fclose(f) != 0;
+    else
+        bad |= fflush(f) != 0;
+    return bad ? fail(path ? path : "stdout", "write failed") : 0;
+}
+
+/* The planner state is 4 MiB: static, as on a board. */
+static struct qrt_planner planner;
+
+/* Scene -> built mask. Returns 0 or an exit status. */
+static int prepare(const char *path, struct scene *sc, int use_astar,
+                   int simplify, long *convert_us)
+{
+    char err[512];
+    long t0;
+    int rc;
+    if (scene_load(path, sc, err, sizeof err))
+        return fail(path, err);
+    sc->params.use_astar = use_astar;
+    sc->params.simplify = simplify;
+    rc = qrt_planner_init(&planner, &sc->params);
+    if (rc != QRT_OK) {
+        scene_free(sc);
+        return fail(path, rc == QRT_E_TOO_BIG
+                              ? "lattice larger than this build's tables "
+                                "(coarser grid_deg or narrower limits)"
+                              : "invalid arm, margins or grid_deg (alpha "
+                                "wraps only with a grid that divides 360)");
+    }
+    t0 = now_us();
+    if (qrt_planner_add_points(&planner, sc->points, sc->n_points) != QRT_OK) {
+        scene_free(sc);
+        return fail(path, "obstacle points must be finite");
+    }
+    qrt_planner_build_mask(&planner);
+    *convert_us = now_us() - t0;
+    return 0;
+}
+
+static int cmd_plan(int argc, char **argv)
+{
+    const char *scene_path = NULL, *out_path = NULL;
+    struct scene sc;
+    struct qrt_plan plan;
+    struct stage_times t;
+    int use_astar = 1, simplify = 1, i, rc;
+    long t_start = now_us(), t1;
+    FILE *out;
+    for (i = 0; i < argc; i++) {
+        if (strcmp(argv[i], "-o") == 0 && i + 1 < argc)
+            out_path = argv[++i];
+        else if (strcmp(argv[i], "--dijkstra") == 0)
+            use_astar = 0;
+        else if (strcmp(argv[i], "--no-simplify") == 0)
+            simplify = 0;
+        else if (argv[i][0] != '-' && !scene_path)
+            scene_path = argv[i];
+        else
+            return fail(NULL, "plan: unexpected argument (see --help)");
+    }
+    if (!scene_path)
+        return fail(NULL, "plan: no scene file given (see --help)");
+    rc = prepare(scene_path, &sc, use_astar, simplify, &t.convert_us);
+    if (rc)
+        return rc;
+    t1 = now_us();
+    rc = qrt_planner_plan(&planner, &sc.start, &sc.goal, &plan);
+    t.search_us = now_us() - t1;
+    scene_free(&sc);
+    if (rc != QRT_OK)
+        return fail(scene_path, qrt_err_name(rc));
+    out = open_output(out_path);
+    if (!out)
+        return fail(out_path, "cannot open for writing");
+    t.total_us = now_us() - t_start;
+    plan_write_json(out, &plan, &t);
+    return close_output(out, out_path);
+}
+
+static int cmd_mask(int argc, char **argv)
+{
+    const char *scene_path = NULL, *out_path = NULL;
+    struct scene sc;
+    long convert_us;
+    int i, rc;
+    FILE *out;
+    for (i = 0; i < argc; i++) {
+        if (strcmp(argv[i], "-o") == 0 && i + 1 < argc)
+            out_path = argv[++i];
+        else if (argv[i][0] != '-' && !scene_path)
+            scene_path = argv[i];
+        else
+            return fail(NULL, "mask: unexpected argument (see --help)");
+    }
+    if (!scene_path)
+        return fail(NULL, "mask: no scene file given (see --help)");
+    rc = prepare(scene_path, &sc, 1, 1, &convert_us);
+    if (rc)
+        return rc;
+    scene_free(&sc);
+    out = open_output(out_path);
+    if (!out)
+        return fail(out_path, "cannot open for writing");
+    mask_write_json(out, &planner.mask);
+    return close_output(out, out_path);
+}
+
+static int parse_triple(const char *s, double v[3])
+{
+    char extra;
+    return sscanf(s, "%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &extra) == 3;
+}
+
+static int write_pcd(const char *path, const double *xyz, long n, int ascii)
+{
+    FILE *f = fopen(path, ascii ? "w" : "wb");
+    long i;
+    if (!f)
+        return -1;
+    fprintf(f, "# .PCD v0.7 - written by qrtplan gen\nVERSION 0.7\n"
+            "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+            "WIDTH %ld\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS %ld\n"
+            "DATA %s\n", n, n, ascii ? "ascii" : "binary");
+    for (i = 0; i < n; i++) {
+        float p[3];
+        p[0] = (float)xyz[3 * i];
+        p[1] = (float)xyz[3 * i + 1];
+        p[2] = (float)xyz[3 * i + 2];
+        if (ascii)
+            fprintf(f, "%.9g %.9g %.9g\n", p[0], p[1], p[2]);
+        else
+            fwrite(p, sizeof p[0], 3, f);
+    }
+    return fclose(f) == 0 ? 0 : -1;
+}
+
+static const char *base_name(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    return slash ? slash + 1 : path;
+}
+
+static int cmd_gen(int argc, char **argv)
+{
+    struct sphere_layout L;
+    double start[3] = {-100, 0, 0}, goal[3] = {100, 0, 0}, *xyz;
+    const char *out_path = NULL, *pcd_path = NULL;
+    int pcd_ascii = 0, i;
+    long n;
+    FILE *out;
+    sphere_layout_default(&L);
+    for (i = 0; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        char *end = NULL;
+        if (!v)
+            return fail(NULL, "gen: option without a value (see --help)");
+        i++;
+        if (strcmp(a, "--spheres") == 0)
+            L.spheres = (int)strtol(v, &end, 10);
+        else if (strcmp(a, "--points") == 0)
+            L.points = (int)strtol(v, &end, 10);
+        else if (strcmp(a, "--radius") == 0)
+            L.radius_m = strtod(v, &end);
+        else if (strcmp(a, "--distance") == 0)
+            L.distance_m = strtod(v, &end);
+        else if (strcmp(a, "--height") == 0)
+            L.height_m = strtod(v, &end);
+        else if (strcmp(a, "--phase") == 0)
+            L.phase_deg = strtod(v, &end);
+        else if (strcmp(a, "--start") == 0 && parse_triple(v, start))
+            continue;
+        else if (strcmp(a, "--goal") == 0 && parse_triple(v, goal))
+            continue;
+        else if (strcmp(a, "-o") == 0)
+            out_path = v;
+        else if (strcmp(a, "--pcd") == 0 || strcmp(a, "--pcd-ascii") == 0) {
+            pcd_path = v;
+            pcd_ascii = a[5] == '-';
+        } else
+            return fail(NULL, "gen: bad option or value (see --help)");
+        if (end && *end)
+            return fail(NULL, "gen: bad number (see --help)");
+    }
+    if (L.spheres < 1 || L.spheres > 1000 || L.points < 4 ||
+        L.points > 100000000 || L.radius_m <= 0.0)
+        return fail(NULL, "gen: need 1..1000 spheres, 4..1e8 points, radius > 0");
+    n = sphere_layout_count(&L);
+    xyz = malloc((size_t)n * 3 * sizeof *xyz);
+    if (!xyz)
+        return fail(NULL, "gen: out of memory");
+    sphere_layout_points(&L, xyz);
+    if (pcd_path && write_pcd(pcd_path, xyz, n, pcd_ascii)) {
+        free(xyz);
+        return fail(pcd_path, "cannot write");
+    }
+    out = open_output(out_path);
+    if (!out) {
+        free(xyz);
+        return fail(out_path, "cannot open for writing");
+    }
+    fprintf(out, "{\n  \"version\": 1,\n  \"name\": \"%d sphere(s) x %ld "
+            "points (paper Eq. 13)\",\n", L.spheres, n / L.spheres);
+    if (pcd_path) {
+        fprintf(out, "  \"points_file\": \"%s\",\n", base_name(pcd_path));
+    } else {
+        fprintf(out, "  \"points\": [");
+        for (i = 0; i < n; i++)
+            fprintf(out, "%s[%.6f, %.6f, %.6f]", i ? (i % 4 ? ", " : ",\n    ")
+                                                   : "\n    ",
+                    xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
+        fprintf(out, "\n  ],\n");
+    }
+    fprintf(out, "  \"start\": {\"joints_deg\": [%g, %g, %g]},\n"
+            "  \"goal\": {\"joints_deg\": [%g, %g, %g]}\n}\n",
+            start[0], start[1], start[2], goal[0], goal[1], goal[2]);
+    free(xyz);
+    return close_output(out, out_path);
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        fputs(usage, stderr);
+        return 2;
+    }
+    if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0 ||
+        (argc > 2 && (strcmp(argv[2], "--help") == 0))) {
+        fputs(usage, stdout);
+        fputs(help, stdout);
+        return 0;
+    }
+    if (strcmp(argv[1], "--version") == 0) {
+        printf("qrtplan %s (lattice >= %d deg, %d points exact)\n",
+               QRTPLAN_VERSION, QRT_GRID_DEG_MIN, QRT_MAX_POINTS);
+        return 0;
+    }
+    if (strcmp(argv[1], "plan") == 0)
+        return cmd_plan(argc - 2, argv + 2);
+    if (strcmp(argv[1], "mask") == 0)
+        return cmd_mask(argc - 2, argv + 2);
+    if (strcmp(argv[1], "gen") == 0)
+        return cmd_gen(argc - 2, argv + 2);
+    fputs(usage, stderr);
+    return 2;
+}

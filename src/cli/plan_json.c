@@ -1,0 +1,68 @@
+#include "plan_json.h"
+
+static void write_joints(FILE *out, const double q[3])
+{
+    fprintf(out, "[%.10g, %.10g, %.10g]", q[0], q[1], q[2]);
+}
+
+void plan_write_json(FILE *out, const struct qrt_plan *plan,
+                     const struct stage_times *t)
+{
+    int ok = plan->status == QRT_STATUS_OK, i;
+    fprintf(out, "{\n  \"version\": 1,\n  \"status\": \"%s\",\n",
+            qrt_plan_status_name(plan->status));
+    if (plan->status == QRT_STATUS_CAPACITY && plan->points_dropped > 0)
+        fprintf(out, "  \"detail\": \"%ld obstacle points dropped: more than "
+                "the point table holds even as %.0f mm voxels; not planning "
+                "on a partial cloud\",\n",
+                plan->points_dropped, 1000.0 * plan->voxel_m);
+    else
+        fprintf(out, "  \"detail\": \"%s\",\n", plan->detail);
+    if (ok) {
+        fprintf(out, "  \"waypoints_deg\": [");
+        for (i = 0; i < plan->n_waypoints; i++) {
+            fprintf(out, "%s\n    ", i ? "," : "");
+            write_joints(out, plan->waypoints_deg[i]);
+        }
+        fprintf(out, "\n  ],\n  \"cost_deg\": %.6f,\n", plan->cost_deg);
+    }
+    if (plan->status != QRT_STATUS_UNREACHABLE &&
+        plan->status != QRT_STATUS_CAPACITY) {
+        fprintf(out, "  \"start_deg\": ");
+        write_joints(out, plan->start_deg);
+        fprintf(out, ",\n");
+        if (plan->status != QRT_STATUS_START_BLOCKED) {
+            fprintf(out, "  \"goal_deg\": ");
+            write_joints(out, plan->goal_deg);
+            fprintf(out, ",\n");
+        }
+    }
+    fprintf(out, "  \"stats\": {\"points\": %ld, \"points_ignored\": %ld, "
+            "\"points_dropped\": %ld, \"voxel_m\": %g, \"cells_blocked\": %ld, "
+            "\"nodes_expanded\": %ld, ",
+            plan->points, plan->points_ignored, plan->points_dropped,
+            plan->voxel_m, plan->cells_blocked, plan->nodes_expanded);
+    if (ok)
+        fprintf(out, "\"lattice_cost_deg\": %.6f, ", plan->lattice_cost_deg);
+    fprintf(out, "\"lattice_path_nodes\": %ld, \"start_node\": %ld, "
+            "\"goal_node\": %ld,\n    \"time_us\": {\"convert\": %ld, "
+            "\"search\": %ld, \"total\": %ld}}\n}\n",
+            plan->lattice_path_nodes, plan->start_node, plan->goal_node,
+            t->convert_us, t->search_us, t->total_us);
+}
+
+void mask_write_json(FILE *out, const struct qrt_mask *mask)
+{
+    const struct qrt_lattice *lat = &mask->lat;
+    long n = qrt_lattice_node_count(lat), i, written = 0;
+    fprintf(out, "{\"version\": 1, \"grid_deg\": %g, \"n\": [%d, %d, %d], "
+            "\"lo_deg\": [%g, %g, %g], \"alpha_wraps\": %s, "
+            "\"cells_blocked\": %ld,\n \"blocked\": [",
+            lat->grid_deg, lat->n[0], lat->n[1], lat->n[2], lat->lo_deg[0],
+            lat->lo_deg[1], lat->lo_deg[2], lat->alpha_wraps ? "true" : "false",
+            qrt_mask_count_blocked(mask));
+    for (i = 0; i < n; i++)
+        if (qrt_mask_blocked_index(mask, i))
+            fprintf(out, "%s%ld", written++ % 16 ? ", " : (written > 1 ? ",\n  " : ""), i);
+    fprintf(out, "]}\n");
+}

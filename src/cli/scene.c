@@ -1,0 +1,360 @@
+#define _POSIX_C_SOURCE 200809L
+/* Scene loading and validation: every field's type, length and range. */
+#include "scene.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "json.h"
+#include "pcd.h"
+
+int read_whole_file(const char *path, char **buf, size_t *len, char *err,
+                    size_t err_len)
+{
+    FILE *f = fopen(path, "rb");
+    size_t cap = 1 << 16, n = 0;
+    char *b;
+    if (!f) {
+        snprintf(err, err_len, "cannot open %s: %s", path, strerror(errno));
+        return -1;
+    }
+    b = malloc(cap);
+    while (b) {
+        size_t got = fread(b + n, 1, cap - n - 1, f);
+        n += got;
+        if (n < cap - 1)
+            break;
+        cap *= 2;
+        {
+            char *grown = realloc(b, cap);
+            if (!grown) {
+                free(b);
+                b = NULL;
+            } else {
+                b = grown;
+            }
+        }
+    }
+    if (!b || ferror(f)) {
+        snprintf(err, err_len, "cannot read %s", path);
+        free(b);
+        fclose(f);
+        return -1;
+    }
+    fclose(f);
+    b[n] = '\0';
+    *buf = b;
+    *len = n;
+    return 0;
+}
+
+/* Exactly n numbers, each within [lo, hi]. */
+static int get_numbers(const struct json *v, const char *what, size_t n,
+                       double lo, double hi, double *out, char *err,
+                       size_t err_len)
+{
+    size_t i;
+    if (!v || v->type != JSON_ARRAY || v->count != n) {
+        snprintf(err, err_len, "%s must be an array of %zu numbers", what, n);
+        return -1;
+    }
+    for (i = 0; i < n; i++) {
+        if (v->items[i].type != JSON_NUMBER) {
+            snprintf(err, err_len, "%s[%zu] must be a number, not %s", what, i,
+                     json_type_name(v->items[i].type));
+            return -1;
+        }
+        if (v->items[i].number < lo || v->items[i].number > hi) {
+            snprintf(err, err_len, "%s[%zu] = %g is outside [%g, %g]", what, i,
+                     v->items[i].number, lo, hi);
+            return -1;
+        }
+        out[i] = v->items[i].number;
+    }
+    return 0;
+}
+
+static int get_number(const struct json *obj, const char *key, double lo,
+                      double hi, double *out, char *err, size_t err_len)
+{
+    const struct json *v = json_get(obj, key);
+    if (!v)
+        return 0; /* optional: keep the default */
+    if (v->type != JSON_NUMBER) {
+        snprintf(err, err_len, "%s must be a number, not %s", key,
+                 json_type_name(v->type));
+        return -1;
+    }
+    if (v->number < lo || v->number > hi) {
+        snprintf(err, err_len, "%s = %g is outside [%g, %g]", key, v->number,
+                 lo, hi);
+        return -1;
+    }
+    *out = v->number;
+    return 0;
+}
+
+static int only_keys(const struct json *obj, const char *what,
+                     const char *const *allowed, char *err, size_t err_len)
+{
+    size_t i;
+    for (i = 0; i < obj->count; i++) {
+        const char *const *a;
+        for (a = allowed; *a; a++)
+            if (strcmp(obj->keys[i], *a) == 0)
+                break;
+        if (!*a) {
+            snprintf(err, err_len, "unknown field \"%s\" in %s", obj->keys[i],
+                     what);
+            return -1;
+        }
+    }
+    return 0;
+}
+
+static int parse_arm(const struct json *arm, struct qrt_arm *out, char *err,
+                     size_t err_len)
+{
+    static const char *const keys[] = {"links_m", "link_radius_m",
+                                       "limits_deg", NULL};
+    const struct json *v;
+    int j;
+    if (arm->type != JSON_OBJECT) {
+        snprintf(err, err_len, "arm must be an object");
+        return -1;
+    }
+    if (only_keys(arm, "arm", keys, err, err_len))
+        return -1;
+    if ((v = json_get(arm, "links_m")) &&
+        get_numbers(v, "arm.links_m", 3, 1e-6, 100.0, out->link_m, err,
+                    err_len))
+        return -1;
+    if ((v = json_get(arm, "link_radius_m")) &&
+        get_numbers(v, "arm.link_radius_m", 3, 0.0, 10.0, out->link_radius_m,
+                    err, err_len))
+        return -1;
+    if ((v = json_get(arm, "limits_deg"))) {
+        if (v->type != JSON_ARRAY || v->count != 3) {
+            snprintf(err, err_len, "arm.limits_deg must be 3 [lo, hi] pairs");
+            return -1;
+        }
+        for (j = 0; j < 3; j++) {
+            char what[32];
+            snprintf(what, sizeof what, "arm.limits_deg[%d]", j);
+            if (get_numbers(&v->items[j], what, 2, -360.0, 360.0,
+                            out->limit_deg[j], err, err_len))
+                return -1;
+            if (out->limit_deg[j][0] > out->limit_deg[j][1]) {
+                snprintf(err, err_len, "%s: lower limit above upper", what);
+                return -1;
+            }
+        }
+        if (out->limit_deg[0][0] < -180.0 || out->limit_deg[0][1] > 180.0) {
+            snprintf(err, err_len, "arm.limits_deg[0] must lie in [-180, 180]");
+            return -1;
+        }
+    }
+    return 0;
+}
+
+static int parse_target(const struct json *root, const char *key,
+                        const struct qrt_arm *arm, struct qrt_target *t,
+                        char *err, size_t err_len)
+{
+    static const char *const keys[] = {"joints_deg", "xyz_m", NULL};
+    const struct json *v = json_get(root, key), *j, *x;
+    char what[32];
+    if (!v) {
+        snprintf(err, err_len, "missing field \"%s\"", key);
+        return -1;
+    }
+    if (v->type != JSON_OBJECT) {
+        snprintf(err, err_len, "%s must be an object with joints_deg or "
+                 "xyz_m", key);
+        return -1;
+    }
+    if (only_keys(v, key, keys, err, err_len))
+        return -1;
+    j = json_get(v, "joints_deg");
+    x = json_get(v, "xyz_m");
+    if ((j != NULL) == (x != NULL)) {
+        snprintf(err, err_len, "%s needs exactly one of joints_deg or xyz_m",
+                 key);
+        return -1;
+    }
+    snprintf(what, sizeof what, "%s.%s", key, j ? "joints_deg" : "xyz_m");
+    t->kind = j ? QRT_TARGET_JOINTS : QRT_TARGET_XYZ;
+    if (get_numbers(j ? j : x, what, 3, -HUGE_VAL, HUGE_VAL, t->value, err,
+                    err_len))
+        return -1;
+    if (j && qrt_arm_check_joints(arm, t->value) != QRT_OK) {
+        snprintf(err, err_len, "%s (%g, %g, %g) is outside the joint limits",
+                 what, t->value[0], t->value[1], t->value[2]);
+        return -1;
+    }
+    return 0;
+}
+
+static int append_points(struct scene *sc, const double *xyz, long n,
+                         char *err, size_t err_len)
+{
+    double *grown;
+    if (n == 0)
+        return 0;
+    grown = realloc(sc->points, (size_t)(sc->n_points + n) * 3 * sizeof *grown);
+    if (!grown) {
+        snprintf(err, err_len, "out of memory for %ld points",
+                 sc->n_points + n);
+        return -1;
+    }
+    memcpy(grown + 3 * sc->n_points, xyz, (size_t)n * 3 * sizeof *xyz);
+    sc->points = grown;
+    sc->n_points += n;
+    return 0;
+}
+
+static int parse_inline_points(const struct json *v, struct scene *sc,
+                               char *err, size_t err_len)
+{
+    size_t i;
+    if (v->type != JSON_ARRAY) {
+        snprintf(err, err_len, "points must be an array of [x, y, z]");
+        return -1;
+    }
+    sc->points = v->count ? malloc(v->count * 3 * sizeof *sc->points) : NULL;
+    if (v->count && !sc->points) {
+        snprintf(err, err_len, "out of memory for %zu points", v->count);
+        return -1;
+    }
+    for (i = 0; i < v->count; i++) {
+        char what[48];
+        snprintf(what, sizeof what, "points[%zu]", i);
+        if (get_numbers(&v->items[i], what, 3, -HUGE_VAL, HUGE_VAL,
+                        sc->points + 3 * i,
+                        err, err_len))
+            return -1;
+    }
+    sc->n_points = (long)v->count;
+    return 0;
+}
+
+static int load_points_file(const struct json *v, const char *base_dir,
+                            struct scene *sc, char *err, size_t err_len)
+{
+    char path[4096], perr[256];
+    char *buf;
+    size_t len;
+    double *xyz;
+    long n;
+    int rc;
+    if (v->type != JSON_STRING || v->string[0] == '\0') {
+        snprintf(err, err_len, "points_file must be a file name");
+        return -1;
+    }
+    if (v->string[0] == '/' || !base_dir || !base_dir[0])
+        snprintf(path, sizeof path, "%s", v->string);
+    else
+        snprintf(path, sizeof path, "%s/%s", base_dir, v->string);
+    if (read_whole_file(path, &buf, &len, err, err_len))
+        return -1;
+    rc = pcd_parse(buf, len, &xyz, &n, perr, sizeof perr);
+    free(buf);
+    if (rc) {
+        snprintf(err, err_len, "%s: %s", path, perr);
+        return -1;
+    }
+    rc = append_points(sc, xyz, n, err, err_len);
+    free(xyz);
+    return rc;
+}
+
+int scene_parse(const char *text, size_t len, const char *base_dir,
+                struct scene *sc, char *err, size_t err_len)
+{
+    static const char *const keys[] = {
+        "version", "name", "comment", "arm", "margin_m", "cspace_margin_deg",
+        "grid_deg", "points", "points_file", "start", "goal", NULL};
+    const struct json *v;
+    struct json *root;
+    char jerr[200];
+    int rc = -1;
+
+    memset(sc, 0, sizeof *sc);
+    qrt_params_default(&sc->params);
+    root = json_parse(text, len, jerr, sizeof jerr);
+    if (!root) {
+        snprintf(err, err_len, "malformed JSON %s", jerr);
+        return -1;
+    }
+    if (root->type != JSON_OBJECT) {
+        snprintf(err, err_len, "a scene must be a JSON object");
+        goto out;
+    }
+    if (only_keys(root, "the scene", keys, err, err_len))
+        goto out;
+    v = json_get(root, "version");
+    if (v && (v->type != JSON_NUMBER || v->number != 1.0)) {
+        snprintf(err, err_len, "version must be 1");
+        goto out;
+    }
+    if ((v = json_get(root, "arm")) && parse_arm(v, &sc->params.arm, err,
+                                                 err_len))
+        goto out;
+    if (get_number(root, "margin_m", 0.0, 10.0, &sc->params.margin_m, err,
+                   err_len) ||
+        get_number(root, "cspace_margin_deg", 0.0, 45.0,
+                   &sc->params.cspace_margin_deg, err, err_len) ||
+        get_number(root, "grid_deg", QRT_GRID_DEG_MIN, 180.0,
+                   &sc->params.grid_deg, err, err_len))
+        goto out;
+    if (!json_get(root, "points") && !json_get(root, "points_file")) {
+        snprintf(err, err_len, "missing field \"points\" (or \"points_file\")");
+        goto out;
+    }
+    if ((v = json_get(root, "points")) &&
+        parse_inline_points(v, sc, err, err_len))
+        goto out;
+    if ((v = json_get(root, "points_file")) &&
+        load_points_file(v, base_dir, sc, err, err_len))
+        goto out;
+    if (parse_target(root, "start", &sc->params.arm, &sc->start, err,
+                     err_len) ||
+        parse_target(root, "goal", &sc->params.arm, &sc->goal, err, err_len))
+        goto out;
+    rc = 0;
+out:
+    json_free(root);
+    if (rc)
+        scene_free(sc);
+    return rc;
+}
+
+int scene_load(const char *path, struct scene *sc, char *err, size_t err_len)
+{
+    char *buf, dir[4096];
+    const char *slash = strrchr(path, '/');
+    size_t len;
+    int rc;
+    memset(sc, 0, sizeof *sc);
+    if (read_whole_file(path, &buf, &len, err, err_len))
+        return -1;
+    if (slash && (size_t)(slash - path) < sizeof dir) {
+        memcpy(dir, path, (size_t)(slash - path));
+        dir[slash - path] = '\0';
+    } else {
+        strcpy(dir, slash ? "/" : ".");
+    }
+    rc = scene_parse(buf, len, dir, sc, err, err_len);
+    free(buf);
+    return rc;
+}
+
+void scene_free(struct scene *sc)
+{
+    free(sc->points);
+    sc->points = NULL;
+    sc->n_points = 0;
+}

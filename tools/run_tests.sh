@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Every test of the project, as `make test` and CI run them:
+#   1. the release build's CTest suite (C unit tests + Python tests),
+#   2. the same suite built with AddressSanitizer and UBSan,
+#   3. the libFuzzer target on the scene/PCD readers for a bounded time.
+# Ends with one "N passed, M failed" line; exits non-zero on any failure.
+set -uo pipefail
+cd "$(dirname "$0")/.."
+jobs=$(nproc 2>/dev/null || echo 2)
+gen=$(command -v ninja >/dev/null && echo "-G Ninja")
+fuzz_seconds=${QRT_FUZZ_SECONDS:-30}
+passed=0
+failed=0
+
+run_suite() { # name builddir cmake-args...
+    local name=$1 dir=$2 out
+    shift 2
+    echo "== $name"
+    if ! cmake -S . -B "$dir" $gen "$@" >/dev/null ||
+        ! cmake --build "$dir" -j "$jobs" >"$dir.log" 2>&1; then
+        cat "$dir.log"
+        echo "$name: build failed"
+        failed=$((failed + 1))
+        return
+    fi
+    out=$(cd "$dir" && ctest --output-on-failure -j "$jobs" 2>&1)
+    echo "$out" | grep -E "Test +#|tests passed|Failed|FAIL|Error" | tail -40
+    local total fails
+    total=$(echo "$out" | sed -n 's/.*tests passed, [0-9]* tests failed out of \([0-9]*\).*/\1/p')
+    fails=$(echo "$out" | sed -n 's/.*tests passed, \([0-9]*\) tests failed out of.*/\1/p')
+    if [ -z "$total" ]; then
+        echo "$out" | tail -20
+        failed=$((failed + 1))
+        return
+    fi
+    passed=$((passed + total - fails))
+    failed=$((failed + fails))
+}
+
+run_suite "release build" build -DCMAKE_BUILD_TYPE=RelWithDebInfo
+ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
+    run_suite "ASan + UBSan build" build-asan -DCMAKE_BUILD_TYPE=Debug \
+    -DQRT_SANITIZE=ON
+
+echo "== libFuzzer: scene and PCD readers, ${fuzz_seconds} s"
+if tools/fuzz.sh "$fuzz_seconds"; then
+    passed=$((passed + 1))
+else
+    failed=$((failed + 1))
+fi
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]
