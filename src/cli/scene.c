@@ -11,6 +11,9 @@
 #include "json.h"
 #include "pcd.h"
 
+/* Larger files (or endless ones such as /dev/zero) are refused. */
+#define SCENE_MAX_FILE_BYTES (1 << 30)
+
 int read_whole_file(const char *path, char **buf, size_t *len, char *err,
                     size_t err_len)
 {
@@ -27,6 +30,13 @@ int read_whole_file(const char *path, char **buf, size_t *len, char *err,
         n += got;
         if (n < cap - 1)
             break;
+        if (cap >= SCENE_MAX_FILE_BYTES) {
+            snprintf(err, err_len, "%s is larger than %d MiB", path,
+                     SCENE_MAX_FILE_BYTES >> 20);
+            free(b);
+            fclose(f);
+            return -1;
+        }
         cap *= 2;
         {
             char *grown = realloc(b, cap);

@@ -1,0 +1,196 @@
+"""Every failure mode of design.md section 5: a plan status for well-formed
+scenes, one line on stderr and exit 2 for input qrtplan cannot use; never a
+crash or a hang."""
+import json
+import math
+import struct
+
+import numpy as np
+import pytest
+
+from conftest import plan_scene, run_cli
+
+GOOD = {"version": 1, "points": [[0.5, 0.5, 0.5]],
+        "start": {"joints_deg": [-100, 0, 0]}, "goal": {"joints_deg": [100, 0, 0]}}
+
+
+def expect_error(path, *words):
+    r = run_cli(["plan", path])
+    assert r.returncode == 2, (r.returncode, r.stdout[:200])
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("qrtplan: "), r.stderr
+    for w in words:
+        assert w in lines[0], lines[0]
+    return lines[0]
+
+
+def write(tmp_path, text, name="scene.json"):
+    p = tmp_path / name
+    p.write_text(text) if isinstance(text, str) else p.write_bytes(text)
+    return p
+
+
+def with_(**changes):
+    s = json.loads(json.dumps(GOOD))
+    for k, v in changes.items():
+        if v is None:
+            s.pop(k, None)
+        else:
+            s[k] = v
+    return s
+
+
+@pytest.mark.parametrize("text,words", [
+    ("", ["unexpected end"]),
+    ("{", ["end of input"]),
+    (json.dumps(GOOD)[:-7], ["end of input"]),
+    (json.dumps(GOOD) + " x", ["trailing"]),
+    ("[1, 2, 3]", ["object"]),
+    ('{"version": 1, "points": [[NaN, 0, 0]]}', ["unexpected character"]),
+    ('{"version": 1, "points": [[1e400, 0, 0]]}', ["out of range"]),
+    ('{"a": 1, "a": 2}', ["duplicate"]),
+    ("[" * 100000 + "]" * 100000, ["nesting"]),
+    ('{"points": "\x01"}', ["control character"]),
+])
+def test_malformed_json(qrtplan, tmp_path, text, words):
+    expect_error(write(tmp_path, text), *words)
+
+
+@pytest.mark.parametrize("scene,words", [
+    (with_(start=None), ["start"]),
+    (with_(goal=None), ["goal"]),
+    (with_(points=None), ["points"]),
+    (with_(version=2), ["version"]),
+    (with_(points=[[1, 2]]), ["points[0]"]),
+    (with_(points=[[1, "2", 3]]), ["points[0][1]", "number"]),
+    (with_(points={"x": 1}), ["points"]),
+    (with_(margin_m=-0.1), ["margin_m"]),
+    (with_(margin_m="big"), ["margin_m", "number"]),
+    (with_(grid_deg=1), ["grid_deg"]),
+    (with_(grid_deg=7), ["grid_deg"]),  # 7 does not divide 360
+    (with_(arm={"links_m": [0.1, 0.2]}), ["links_m"]),
+    (with_(arm={"limits_deg": [[-180, 180], [90, 0], [-180, 140]]}), ["limits"]),
+    (with_(arm={"elbow": 1}), ["elbow"]),
+    (with_(colour="red"), ["colour"]),
+    (with_(start={"joints_deg": [0, -60, 0]}), ["outside the joint limits"]),
+    (with_(goal={"joints_deg": [0, 0, 150]}), ["outside the joint limits"]),
+    (with_(start={"joints_deg": [190, 0, 0]}), ["outside the joint limits"]),
+    (with_(start={"joints_deg": [0, 0, 0], "xyz_m": [0, 0, 0]}), ["exactly one"]),
+    (with_(start={}), ["exactly one"]),
+    (with_(points_file="does-not-exist.pcd"), ["does-not-exist.pcd"]),
+])
+def test_invalid_scenes(qrtplan, tmp_path, scene, words):
+    expect_error(write(tmp_path, json.dumps(scene)), *words)
+
+
+def pcd_header(n, data="binary", fields="x y z", size="4 4 4", type_="F F F",
+               count="1 1 1", width=None):
+    return (f"# .PCD v0.7\nVERSION 0.7\nFIELDS {fields}\nSIZE {size}\n"
+            f"TYPE {type_}\nCOUNT {count}\nWIDTH {n if width is None else width}\n"
+            f"HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\nDATA {data}\n").encode()
+
+
+def scene_with_pcd(tmp_path, payload):
+    write(tmp_path, payload, "cloud.pcd")
+    return write(tmp_path, json.dumps(with_(points=None, points_file="cloud.pcd")))
+
+
+@pytest.mark.parametrize("payload,words", [
+    (pcd_header(10) + b"\0" * 50, ["truncated"]),
+    (pcd_header(3, "ascii") + b"0 0 0\n1 1\n", ["truncated"]),
+    (pcd_header(2, "ascii") + b"0 0 0\n1 x 1\n", ["bad number"]),
+    (pcd_header(2, "ascii") + b"0 0 0\nnan 0 0\n", ["not finite"]),
+    (pcd_header(1) + struct.pack("<3f", 0.0, math.inf, 0.0), ["not finite"]),
+    (pcd_header(4, width=3) + b"\0" * 48, ["POINTS"]),
+    (pcd_header(1, "binary_compressed") + b"\0" * 12, ["not supported"]),
+    (pcd_header(1, fields="x y", size="4 4", type_="F F", count="1 1") + b"\0" * 8,
+     ["x, y and z"]),
+    (b"hello world\n", ["header"]),
+    (b"VERSION 0.7\nFIELDS x y z\n", ["DATA"]),
+])
+def test_malformed_pcd(qrtplan, tmp_path, payload, words):
+    expect_error(scene_with_pcd(tmp_path, payload), *words)
+
+
+def test_pcd_with_extra_fields_ascii_and_binary(qrtplan, tmp_path):
+    pts = np.array([[0.6, 0.0, 0.0], [0.0, 0.6, 0.2]], np.float32)
+    rows = b"".join(struct.pack("<f3fI", 1.5, *p, 7) for p in pts)
+    binary = pcd_header(2, fields="intensity x y z label", size="4 4 4 4 4",
+                        type_="F F F F U", count="1 1 1 1 1") + rows
+    ascii_ = pcd_header(2, "ascii", fields="x y z rgb", size="4 4 4 4",
+                        type_="F F F F", count="1 1 1 1") + \
+        b"".join(b"%r %r %r 0.5\n" % tuple(float(v) for v in p) for p in pts)
+    for payload in (binary, ascii_):
+        write(tmp_path, payload, "cloud.pcd")
+        code, plan, err = plan_scene(
+            with_(points=None, points_file="cloud.pcd"), tmp_path)
+        assert code == 0, err
+        assert plan["stats"]["points"] == 2
+
+
+def test_empty_cloud_plans_in_free_space(qrtplan, tmp_path):
+    code, plan, err = plan_scene(with_(points=[]), tmp_path)
+    assert code == 0 and plan["status"] == "ok", (err, plan)
+    assert plan["waypoints_deg"][0] == [-100, 0, 0]
+    assert plan["waypoints_deg"][-1] == [100, 0, 0]
+
+
+def test_start_and_goal_blocked(qrtplan, tmp_path):
+    on_start = [0.96 * math.cos(math.radians(-100)), 0.96 * math.sin(math.radians(-100)), 0]
+    code, plan, _ = plan_scene(with_(points=[on_start]), tmp_path)
+    assert code == 0 and plan["status"] == "start_blocked"
+    code, plan, _ = plan_scene(with_(points=[[-on_start[0], -on_start[1], 0]]), tmp_path)
+    # (-x, -y) of alpha -100 lies at alpha 80, not on the goal at 100
+    assert plan["status"] == "ok"
+    on_goal = [0.96 * math.cos(math.radians(100)), 0.96 * math.sin(math.radians(100)), 0]
+    code, plan, _ = plan_scene(with_(points=[on_goal]), tmp_path)
+    assert code == 0 and plan["status"] == "goal_blocked"
+    assert "waypoints_deg" not in plan
+
+
+def test_unreachable_goal_point(qrtplan, tmp_path):
+    code, plan, _ = plan_scene(with_(goal={"xyz_m": [2.0, 0, 0]}), tmp_path)
+    assert code == 0 and plan["status"] == "unreachable"
+    code, plan, _ = plan_scene(with_(goal={"xyz_m": [0, 0, 5]}), tmp_path)
+    assert plan["status"] == "unreachable"
+
+
+def test_no_path_when_walled_in(qrtplan, tmp_path):
+    # walls across link 1's circle at alpha 45 and 135: alpha 90 and 0 are cut
+    # off from each other whatever the other joints do
+    wall = [[r * math.cos(a), r * math.sin(a), z]
+            for a in (math.pi / 4, 3 * math.pi / 4)
+            for r in np.arange(0.05, 0.151, 0.01) for z in np.arange(-0.04, 0.041, 0.01)]
+    code, plan, _ = plan_scene(with_(points=wall, start={"joints_deg": [90, 0, 0]},
+                                     goal={"joints_deg": [0, 0, 0]}), tmp_path)
+    assert code == 0 and plan["status"] == "no_path", plan
+
+
+def test_huge_cloud_is_quantised_or_refused_never_overflows(qrtplan, tmp_path):
+    rng = np.random.default_rng(1)
+    # 3 million points: a dense shell that fits as voxels ...
+    u = rng.normal(size=(3_000_000, 3)).astype(np.float32)
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    shell = u * np.float32(0.15) + np.float32([0.0, -0.6, 0.3])
+    write(tmp_path, pcd_header(len(shell)) + shell.tobytes(), "cloud.pcd")
+    code, plan, err = plan_scene(with_(points=None, points_file="cloud.pcd"), tmp_path)
+    assert code == 0, err
+    assert plan["stats"]["voxel_m"] > 0 and plan["stats"]["points_dropped"] == 0
+    assert plan["status"] in ("ok", "no_path")
+    # ... and one filling the whole reach, which no voxel size can hold
+    cube = rng.uniform(-1.0, 1.0, size=(2_000_000, 3)).astype(np.float32)
+    write(tmp_path, pcd_header(len(cube)) + cube.tobytes(), "cloud.pcd")
+    code, plan, err = plan_scene(with_(points=None, points_file="cloud.pcd",
+                                       arm={"links_m": [0.09, 1.5, 1.5]}), tmp_path)
+    assert code == 0, err
+    assert plan["status"] == "capacity" and plan["stats"]["points_dropped"] > 0
+    assert str(plan["stats"]["points_dropped"]) in plan["detail"]
+
+
+def test_help_and_usage(qrtplan):
+    r = run_cli(["--help"])
+    assert r.returncode == 0 and "plan SCENE.json" in r.stdout
+    r = run_cli(["frobnicate"])
+    assert r.returncode == 2
+    r = run_cli(["plan"])
+    assert r.returncode == 2 and r.stderr.count("\n") == 1

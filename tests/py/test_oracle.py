@@ -1,0 +1,65 @@
+"""The oracle must be able to say no: these paths are wrong on purpose."""
+import numpy as np
+
+import oracle
+
+
+def scene(points, start=(0, 0, 0), goal=(90, 0, 0)):
+    return {"version": 1, "points": points, "start": {"joints_deg": list(start)},
+            "goal": {"joints_deg": list(goal)}}
+
+
+def plan(wps):
+    arm = oracle.Arm({})
+    return {"status": "ok", "waypoints_deg": wps,
+            "cost_deg": oracle.path_length(arm, wps)}
+
+
+def test_free_path_passes():
+    s = scene([[0.0, -0.5, 0.5]])
+    r = oracle.check_path(s, plan([[0, 0, 0], [90, 0, 0]]), np.array(s["points"]))
+    assert r.safe, str(r)
+
+
+def test_point_on_the_arm_is_a_collision():
+    s = scene([[0.5, 0.0, 0.0]])
+    r = oracle.check_path(s, plan([[0, 0, 0], [90, 0, 0]]), np.array(s["points"]))
+    assert not r.safe and "collision" in str(r)
+
+
+def test_collision_between_free_waypoints_is_found():
+    # the tip sweeps through a point at 45 degrees, 0.96 m out, while both
+    # waypoints are far from it
+    p = [0.96 * np.cos(np.radians(45)), 0.96 * np.sin(np.radians(45)), 0.0]
+    s = scene([p])
+    pts = np.array([p])
+    arm = oracle.Arm(s)
+    assert oracle.clearances(arm, [[0, 0, 0], [90, 0, 0]], pts).min() >= 0.05
+    r = oracle.check_path(s, plan([[0, 0, 0], [90, 0, 0]]), pts)
+    assert not r.safe
+
+
+def test_alpha_goes_the_short_way_round():
+    # 170 -> -170 crosses 180 (20 degrees), not 0: a point at alpha 0 is safe,
+    # one at alpha 180 is hit
+    wps = [[170, 0, 0], [-170, 0, 0]]
+    front = scene([[0.6, 0.0, 0.0]], start=(170, 0, 0), goal=(-170, 0, 0))
+    back = scene([[-0.6, 0.0, 0.0]], start=(170, 0, 0), goal=(-170, 0, 0))
+    assert oracle.check_path(front, plan(wps), np.array(front["points"])).safe
+    assert not oracle.check_path(back, plan(wps), np.array(back["points"])).safe
+
+
+def test_limit_violation_is_reported():
+    s = scene([], start=(0, 0, 0), goal=(0, -50, 0))
+    r = oracle.check_path(s, plan([[0, 0, 0], [0, -50, 0]]), np.zeros((0, 3)))
+    assert not r.safe and "outside" in str(r)
+
+
+def test_wrong_cost_and_wrong_end_are_reported():
+    s = scene([])
+    p = plan([[0, 0, 0], [80, 0, 0]])
+    r = oracle.check_path(s, p, np.zeros((0, 3)))
+    assert not r.safe and "goal" in str(r)
+    p = plan([[0, 0, 0], [90, 0, 0]])
+    p["cost_deg"] += 1.0
+    assert not oracle.check_path(s, p, np.zeros((0, 3))).safe

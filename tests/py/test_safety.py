@@ -1,0 +1,80 @@
+"""Safety over many seeded random scenes: every ok plan, sampled at 0.1
+degree per joint by the independent oracle, stays in the limits and collides
+with nothing (design.md section 4)."""
+import collections
+import json
+import os
+import subprocess
+import tempfile
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+import oracle
+import scenes
+from conftest import BIN
+
+SEED = int(os.environ.get("QRT_SEED", "20261124"))
+PER_FAMILY = int(os.environ.get("QRT_SCENES_PER_FAMILY", "180"))
+
+
+def free_targets(scene, rng):
+    """Resample start and goal until the oracle finds them collision-free
+    (random joints inside a box mostly hit a wall)."""
+    arm = oracle.Arm(scene)
+    pts = np.asarray(scene["points"], float)
+    for _ in range(40):
+        start, goal = scenes.targets(rng)
+        q = [start["joints_deg"]]
+        if "joints_deg" in goal:
+            q.append(goal["joints_deg"])
+        if oracle.clearances(arm, q, pts).min() > 0.0:
+            scene["start"], scene["goal"] = start, goal
+            return
+
+
+def run_one(args):
+    family, seed = args
+    scene = scenes.make_scene(family, seed)
+    free_targets(scene, np.random.default_rng(seed + 1))
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d) / "scene.json"
+        path.write_text(json.dumps(scene))
+        r = subprocess.run([str(BIN), "plan", str(path)], capture_output=True,
+                           text=True, timeout=120)
+    if r.returncode != 0:
+        return family, seed, "error", r.stderr.strip()
+    plan = json.loads(r.stdout)
+    if plan["status"] != "ok":
+        return family, seed, plan["status"], ""
+    res = oracle.check_path(scene, plan, np.asarray(scene["points"], float))
+    return family, seed, "ok" if res.safe else "UNSAFE", str(res)
+
+
+def test_random_scenes_are_planned_safely(qrtplan, tmp_path):
+    jobs = [(f, SEED + 1000 * i + k) for i, f in enumerate(scenes.FAMILIES)
+            for k in range(PER_FAMILY)]
+    print(f"seed {SEED}, {len(jobs)} scenes")
+    with ProcessPoolExecutor(max_workers=os.cpu_count() or 2) as pool:
+        results = list(pool.map(run_one, jobs, chunksize=4))
+    by_family = collections.defaultdict(collections.Counter)
+    for family, seed, status, _ in results:
+        by_family[family][status] += 1
+    for family, counts in sorted(by_family.items()):
+        print(f"  {family:8s} {dict(counts)}")
+    unsafe = [r for r in results if r[2] == "UNSAFE"]
+    errors = [r for r in results if r[2] == "error"]
+    for family, seed, _, msg in unsafe[:5]:
+        scene = scenes.make_scene(family, seed)
+        out = tmp_path / f"unsafe-{family}-{seed}.json"
+        out.write_text(json.dumps(scene))
+        print(f"UNSAFE {family} seed {seed}: {msg} (scene in {out})")
+    assert len(results) >= 1000
+    assert not unsafe, f"{len(unsafe)} unsafe plans"
+    assert not errors, f"CLI errors on valid scenes: {errors[:3]}"
+    solved = sum(r[2] == "ok" for r in results)
+    # the check must not pass vacuously: most scenes have a path
+    assert solved > 0.5 * len(results), f"only {solved} of {len(results)} solved"
+    for family, counts in by_family.items():
+        assert counts["ok"] > 0, f"no {family} scene solved"

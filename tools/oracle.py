@@ -1,0 +1,240 @@
+#!/usr/bin/env python3
+"""Independent safety oracle for qrtplan plans.
+
+Shares no code with the planner: forward kinematics from design.md section 3,
+exact point-to-segment distances in numpy, and the path sampled at no more
+than 0.1 degree per joint between waypoints (alpha the short way round, its
+step taken in (-180, 180]). A configuration collides when any point is
+closer than link_radius + margin to a link (strict <).
+
+    python tools/oracle.py SCENE.json PLAN.json   # exit 0 safe, 1 not
+"""
+import json
+import math
+import os
+import sys
+
+import numpy as np
+
+DEFAULT_LINKS = (0.090, 0.332, 0.538)
+DEFAULT_RADII = (0.02, 0.02, 0.02)
+DEFAULT_LIMITS = ((-180.0, 180.0), (-40.0, 180.0), (-180.0, 140.0))
+STEP_DEG = 0.1
+
+
+class Arm:
+    def __init__(self, scene):
+        arm = scene.get("arm", {})
+        self.links = tuple(arm.get("links_m", DEFAULT_LINKS))
+        self.radii = np.array(arm.get("link_radius_m", DEFAULT_RADII), float)
+        self.limits = tuple(tuple(l) for l in arm.get("limits_deg", DEFAULT_LIMITS))
+        self.margin = float(scene.get("margin_m", 0.01))
+        self.alpha_wraps = tuple(self.limits[0]) == (-180.0, 180.0)
+
+    def joints(self, q):
+        """(N, 3) joint angles in degrees -> (N, 4, 3) joint positions."""
+        q = np.radians(np.atleast_2d(np.asarray(q, float)))
+        a, s, e = q[:, 0], q[:, 1], q[:, 2]
+        l1, l2, l3 = self.links
+        u = np.stack([np.cos(a), np.sin(a), np.zeros_like(a)], axis=1)
+        p0 = np.zeros_like(u)
+        p1 = l1 * u
+        p2 = p1 + l2 * np.cos(s)[:, None] * u
+        p2[:, 2] = l2 * np.sin(s)
+        p3 = p2 + l3 * np.cos(s + e)[:, None] * u
+        p3[:, 2] = p2[:, 2] + l3 * np.sin(s + e)
+        return np.stack([p0, p1, p2, p3], axis=1)
+
+
+def segment_distances(points, a, b):
+    """Distances from each of M points to each of N segments a[n]-b[n]: (N, M)."""
+    ab = b - a
+    len2 = np.einsum("ij,ij->i", ab, ab)
+    ap = points[None, :, :] - a[:, None, :]
+    t = np.einsum("nmj,nj->nm", ap, ab) / np.where(len2 > 0, len2, 1.0)[:, None]
+    t = np.clip(t, 0.0, 1.0)
+    closest = a[:, None, :] + t[:, :, None] * ab[:, None, :]
+    return np.linalg.norm(points[None, :, :] - closest, axis=2)
+
+
+def clearances(arm, qs, points, batch=48, reach=0.05):
+    """Smallest (distance - radius - margin) per configuration: (N,).
+
+    Exact below `reach` metres; beyond it a configuration may report any
+    value >= reach. Consecutive configurations are taken in batches, and only
+    the points inside the bounding box of a batch's link segments (grown by
+    radius + margin + reach) are measured: a point outside it is farther
+    than that from every segment."""
+    qs = np.atleast_2d(np.asarray(qs, float))
+    out = np.full(len(qs), np.inf)
+    if len(points) == 0:
+        return out
+    for start in range(0, len(qs), batch):
+        p = arm.joints(qs[start:start + batch])
+        best = np.full(len(p), np.inf)
+        for k in range(3):
+            a, b = p[:, k, :], p[:, k + 1, :]
+            grow = arm.radii[k] + arm.margin + reach
+            lo = np.minimum(a.min(axis=0), b.min(axis=0)) - grow
+            hi = np.maximum(a.max(axis=0), b.max(axis=0)) + grow
+            near = points[np.all((points >= lo) & (points <= hi), axis=1)]
+            if len(near) == 0:
+                best = np.minimum(best, reach)
+                continue
+            d = segment_distances(near, a, b)
+            best = np.minimum(best, d.min(axis=1) - arm.radii[k] - arm.margin)
+        out[start:start + batch] = best
+    return out
+
+
+def wrap180(x):
+    r = math.fmod(x, 360.0)
+    if r <= -180.0:
+        r += 360.0
+    elif r > 180.0:
+        r -= 360.0
+    return r
+
+
+def sample_path(arm, waypoints, step=STEP_DEG):
+    """Configurations every <= step degrees per joint along the path."""
+    samples = [np.asarray(waypoints[0], float)]
+    for a, b in zip(waypoints[:-1], waypoints[1:]):
+        d = np.asarray(b, float) - np.asarray(a, float)
+        if arm.alpha_wraps:
+            d[0] = wrap180(d[0])
+        n = max(1, int(math.ceil(np.max(np.abs(d)) / step)))
+        t = np.arange(1, n + 1)[:, None] / n
+        samples.append(np.asarray(a, float)[None, :] + t * d[None, :])
+    q = np.vstack(samples)
+    if arm.alpha_wraps:
+        q[:, 0] = (q[:, 0] + 180.0) % 360.0 - 180.0
+    return q
+
+
+def path_length(arm, waypoints):
+    total = 0.0
+    for a, b in zip(waypoints[:-1], waypoints[1:]):
+        d = np.asarray(b, float) - np.asarray(a, float)
+        if arm.alpha_wraps:
+            d[0] = wrap180(d[0])
+        total += float(np.linalg.norm(d))
+    return total
+
+
+def read_pcd(path):
+    with open(path, "rb") as f:
+        data = f.read()
+    header, pos = {}, 0
+    while True:
+        end = data.index(b"\n", pos)
+        line = data[pos:end].decode().strip()
+        pos = end + 1
+        if not line or line.startswith("#"):
+            continue
+        key, _, rest = line.partition(" ")
+        header[key] = rest.split()
+        if key == "DATA":
+            break
+    fields, sizes = header["FIELDS"], [int(s) for s in header["SIZE"]]
+    types = header["TYPE"]
+    counts = [int(c) for c in header.get("COUNT", ["1"] * len(fields))]
+    n = int(header["POINTS"][0])
+    if header["DATA"][0] == "ascii":
+        rows = np.loadtxt(data[pos:].decode().splitlines(), ndmin=2)
+        cols, col = {}, 0
+        for f_, c in zip(fields, counts):
+            cols[f_] = col
+            col += c
+        return rows[:n, [cols["x"], cols["y"], cols["z"]]].astype(float)
+    fmt = {("F", 4): "f4", ("F", 8): "f8", ("I", 1): "i1", ("I", 2): "i2",
+           ("I", 4): "i4", ("I", 8): "i8", ("U", 1): "u1", ("U", 2): "u2",
+           ("U", 4): "u4", ("U", 8): "u8"}
+    dtype = np.dtype([(f_, "<" + fmt[(t, s)], (c,)) for f_, t, s, c in
+                      zip(fields, types, sizes, counts)])
+    rec = np.frombuffer(data, dtype=dtype, count=n, offset=pos)
+    return np.stack([rec["x"][:, 0], rec["y"][:, 0], rec["z"][:, 0]], axis=1).astype(float)
+
+
+def scene_points(scene, scene_dir="."):
+    pts = [np.asarray(scene.get("points", []), float).reshape(-1, 3)]
+    if "points_file" in scene:
+        pts.append(read_pcd(os.path.join(scene_dir, scene["points_file"])))
+    return np.vstack(pts)
+
+
+class Result:
+    def __init__(self):
+        self.problems = []
+        self.samples = 0
+        self.min_clearance = math.inf
+
+    @property
+    def safe(self):
+        return not self.problems
+
+    def __str__(self):
+        if self.safe:
+            return (f"safe: {self.samples} samples, min clearance "
+                    f"{self.min_clearance:.4f} m")
+        return "; ".join(self.problems)
+
+
+def check_path(scene, plan, points):
+    """Check an ok plan against its scene. Returns a Result."""
+    arm = Arm(scene)
+    res = Result()
+    wps = plan.get("waypoints_deg")
+    if plan.get("status") != "ok" or not wps or len(wps) < 2:
+        res.problems.append("not an ok plan with at least 2 waypoints")
+        return res
+    q = sample_path(arm, wps)
+    res.samples = len(q)
+    for j, (lo, hi) in enumerate(arm.limits):
+        bad = np.nonzero((q[:, j] < lo - 1e-9) | (q[:, j] > hi + 1e-9))[0]
+        if j == 0 and arm.alpha_wraps:
+            continue
+        if len(bad):
+            res.problems.append(f"joint {j} outside [{lo}, {hi}] at sample "
+                                f"{bad[0]}: {q[bad[0]].tolist()}")
+    c = clearances(arm, q, points)
+    res.min_clearance = float(c.min()) if len(c) else math.inf
+    hit = np.nonzero(c < 0.0)[0]
+    if len(hit):
+        res.problems.append(f"collision at sample {hit[0]} {q[hit[0]].tolist()}: "
+                            f"clearance {c[hit[0]]:.5f} m")
+    start, goal = scene["start"], scene["goal"]
+    for name, target, q_end in (("start", start, wps[0]), ("goal", goal, wps[-1])):
+        if "joints_deg" in target:
+            d = np.asarray(q_end, float) - np.asarray(target["joints_deg"], float)
+            d[0] = wrap180(d[0])
+            if np.max(np.abs(d)) > 1e-6:
+                res.problems.append(f"path {name} {q_end} is not {target}")
+        else:
+            tip = arm.joints(q_end)[0, 3]
+            if np.linalg.norm(tip - np.asarray(target["xyz_m"], float)) > 1e-6:
+                res.problems.append(f"path {name} tip {tip.tolist()} misses {target}")
+    cost = path_length(arm, wps)
+    if abs(cost - plan.get("cost_deg", -1.0)) > 1e-4:
+        res.problems.append(f"cost_deg {plan.get('cost_deg')} but path length {cost}")
+    return res
+
+
+def main(argv):
+    if len(argv) != 3:
+        print(__doc__.strip().splitlines()[-1].strip(), file=sys.stderr)
+        return 2
+    with open(argv[1]) as f:
+        scene = json.load(f)
+    with open(argv[2]) as f:
+        plan = json.load(f)
+    if plan.get("status") != "ok":
+        print(f"plan status {plan.get('status')}: nothing to check")
+        return 0
+    res = check_path(scene, plan, scene_points(scene, os.path.dirname(argv[1])))
+    print(res)
+    return 0 if res.safe else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
