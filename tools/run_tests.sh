@@ -37,10 +37,10 @@ run_suite() { # name builddir cmake-args...
     failed=$((failed + fails))
 }
 
-run_suite "release build" build -DCMAKE_BUILD_TYPE=RelWithDebInfo
+run_suite "release build" build -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQRT_PYTHON_TESTS=ON
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
     run_suite "ASan + UBSan build" build-asan -DCMAKE_BUILD_TYPE=Debug \
-    -DQRT_SANITIZE=ON
+    -DQRT_SANITIZE=ON -DQRT_PYTHON_TESTS=ON
 
 echo "== libFuzzer: scene and PCD readers, ${fuzz_seconds} s"
 if tools/fuzz.sh "$fuzz_seconds"; then

@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# `make bench`: the paper's Table 5 grid and larger clouds timed end to end
+# (build/bench/table5.csv, plots), and the instruction count of one plan of
+# the largest Table 5 cell under callgrind, a figure that does not depend on
+# how busy the machine is.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=build/bench
+mkdir -p "$out"
+build/bin/bench_table5 --repeats "${QRT_BENCH_REPEATS:-15}" --csv "$out/table5.csv" |
+    tee "$out/table5.txt"
+.venv/bin/python tools/bench_report.py "$out/table5.csv" "$out"
+if command -v valgrind >/dev/null; then
+    valgrind --tool=callgrind --callgrind-out-file="$out/callgrind.out" \
+        build/bin/bench_table5 --single 10 1444 --repeats 1 >/dev/null 2>&1
+    total=$(callgrind_annotate "$out/callgrind.out" 2>/dev/null |
+        awk '/PROGRAM TOTALS/ {gsub(",", "", $1); print $1}')
+    echo "callgrind, 10 spheres x 1444 points, one end-to-end plan plus" \
+        "building the points: $total instructions" | tee -a "$out/table5.txt"
+fi

@@ -1,0 +1,199 @@
+/* The paper's Table 5 experiment, timed: n spheres x k points (its Eq. 13
+ * family, src/cli/gen.c), end to end (init + points + mask + plan), median
+ * of repeated runs, beside the paper's seconds. Also 10 spheres with 10^4,
+ * 10^5 and 10^6 points each.
+ *
+ *   bench_table5 [--repeats R] [--quick] [--csv FILE] [--single N K]
+ */
+#define _POSIX_C_SOURCE 200809L
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "gen.h"
+#include "qrtplan/qrtplan.h"
+
+static const int table_points[9] = {16, 25, 36, 49, 64, 100, 169, 361, 1444};
+/* Table 5 of the paper, seconds (its "17/484" read as 17.484) */
+static const double paper_s[10][9] = {
+    {0.563, 0.656, 0.750, 0.875, 1.094, 2.500, 3.000, 4.484, 13.484},
+    {0.906, 1.016, 1.156, 1.328, 1.938, 4.797, 5.766, 8.781, 23.219},
+    {1.234, 1.453, 1.703, 2.063, 2.109, 6.812, 8.859, 12.766, 36.109},
+    {1.484, 1.859, 2.047, 2.297, 2.859, 9.125, 11.672, 17.484, 49.453},
+    {1.906, 2.406, 2.578, 2.766, 3.469, 11.250, 13.875, 20.656, 61.234},
+    {2.188, 2.594, 3.250, 3.969, 4.094, 13.484, 17.297, 27.344, 76.609},
+    {2.344, 2.938, 3.406, 4.078, 5.891, 15.406, 19.094, 28.969, 82.953},
+    {2.813, 3.172, 4.016, 4.313, 5.031, 17.422, 22.172, 33.875, 97.359},
+    {3.094, 3.641, 4.031, 4.828, 5.531, 19.469, 24.469, 37.234, 109.953},
+    {3.219, 4.266, 4.781, 6.063, 6.531, 21.547, 27.531, 41.359, 126.500}};
+
+static struct qrt_planner pl;
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+struct cell {
+    double median_ms, min_ms, convert_ms, search_ms;
+    long points, blocked, expanded;
+    const char *status;
+};
+
+/* Spheres on a circle with the start and goal (sigma = eta = 0) in the gaps
+ * between them, so that every plan has to find its way round: one sphere
+ * sits behind the arm as in Table 4. */
+static void scene_for(int n, struct sphere_layout *L, double start[3],
+                      double goal[3])
+{
+    sphere_layout_default(L);
+    L->spheres = n;
+    start[1] = start[2] = goal[1] = goal[2] = 0.0;
+    if (n == 1) {
+        start[0] = -100.0;
+        goal[0] = 100.0;
+        return;
+    }
+    L->phase_deg = 90.0 - 180.0 / n;
+    goal[0] = 90.0;
+    start[0] = 90.0 - 360.0 * (n / 2) / n;
+}
+
+static void run_cell(int n, int k, int repeats, struct cell *c)
+{
+    struct sphere_layout L;
+    struct qrt_params prm;
+    struct qrt_target s = {QRT_TARGET_JOINTS, {0, 0, 0}};
+    struct qrt_target g = {QRT_TARGET_JOINTS, {0, 0, 0}};
+    static struct qrt_plan plan;
+    double *xyz, *times = malloc((size_t)repeats * sizeof *times);
+    double conv = 0.0, search = 0.0;
+    long count;
+    int r;
+    scene_for(n, &L, s.value, g.value);
+    L.points = k;
+    count = sphere_layout_count(&L);
+    xyz = malloc((size_t)count * 3 * sizeof *xyz);
+    if (!xyz || !times) {
+        fprintf(stderr, "out of memory\n");
+        exit(1);
+    }
+    sphere_layout_points(&L, xyz);
+    qrt_params_default(&prm);
+    for (r = 0; r < repeats; r++) {
+        double t0 = now_s(), t1, t2;
+        qrt_planner_init(&pl, &prm);
+        qrt_planner_add_points(&pl, xyz, count);
+        qrt_planner_build_mask(&pl);
+        t1 = now_s();
+        qrt_planner_plan(&pl, &s, &g, &plan);
+        t2 = now_s();
+        times[r] = (t2 - t0) * 1e3;
+        conv += (t1 - t0) * 1e3;
+        search += (t2 - t1) * 1e3;
+    }
+    qsort(times, (size_t)repeats, sizeof *times, cmp_double);
+    c->median_ms = times[repeats / 2];
+    c->min_ms = times[0];
+    c->convert_ms = conv / repeats;
+    c->search_ms = search / repeats;
+    c->points = count;
+    c->blocked = plan.cells_blocked;
+    c->expanded = plan.nodes_expanded;
+    c->status = qrt_plan_status_name(plan.status);
+    free(xyz);
+    free(times);
+}
+
+int main(int argc, char **argv)
+{
+    static const long big[3] = {10000, 100000, 1000000};
+    int repeats = 15, i, n, k, single_n = 0, single_k = 0;
+    const char *csv_path = NULL;
+    FILE *csv = NULL;
+    struct cell c;
+    for (i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--repeats") == 0 && i + 1 < argc)
+            repeats = atoi(argv[++i]);
+        else if (strcmp(argv[i], "--quick") == 0)
+            repeats = 3;
+        else if (strcmp(argv[i], "--csv") == 0 && i + 1 < argc)
+            csv_path = argv[++i];
+        else if (strcmp(argv[i], "--single") == 0 && i + 2 < argc) {
+            single_n = atoi(argv[++i]);
+            single_k = atoi(argv[++i]);
+        } else {
+            fprintf(stderr, "usage: bench_table5 [--repeats R] [--quick] "
+                    "[--csv FILE] [--single SPHERES POINTS]\n");
+            return 2;
+        }
+    }
+    if (repeats < 1)
+        repeats = 1;
+    if (single_n > 0) {
+        run_cell(single_n, single_k, repeats, &c);
+        printf("%d x %d: %s, median %.3f ms, convert %.3f ms, search %.3f ms\n",
+               single_n, single_k, c.status, c.median_ms, c.convert_ms,
+               c.search_ms);
+        return 0;
+    }
+    if (csv_path && !(csv = fopen(csv_path, "w"))) {
+        perror(csv_path);
+        return 1;
+    }
+    if (csv)
+        fprintf(csv, "spheres,points_per_sphere,points,status,median_ms,"
+                "min_ms,convert_ms,search_ms,cells_blocked,nodes_expanded,"
+                "paper_s,speedup\n");
+    printf("Table 5: end-to-end plan time, median of %d runs, ms "
+           "(paper's seconds in brackets, speed-up below)\n", repeats);
+    printf("%7s", "spheres");
+    for (k = 0; k < 9; k++)
+        printf(" %13d", table_points[k]);
+    printf("\n");
+    for (n = 1; n <= 10; n++) {
+        double speed[9];
+        printf("%7d", n);
+        for (k = 0; k < 9; k++) {
+            run_cell(n, table_points[k], repeats, &c);
+            speed[k] = paper_s[n - 1][k] * 1e3 / c.median_ms;
+            printf(" %6.2f[%5.1f]%s", c.median_ms, paper_s[n - 1][k],
+                   strcmp(c.status, "ok") ? "!" : "");
+            fflush(stdout);
+            if (csv)
+                fprintf(csv, "%d,%d,%ld,%s,%.4f,%.4f,%.4f,%.4f,%ld,%ld,%.3f,"
+                        "%.1f\n", n, table_points[k], c.points, c.status,
+                        c.median_ms, c.min_ms, c.convert_ms, c.search_ms,
+                        c.blocked, c.expanded, paper_s[n - 1][k], speed[k]);
+        }
+        printf("\n%7s", "x");
+        for (k = 0; k < 9; k++)
+            printf(" %13.0f", speed[k]);
+        printf("\n");
+    }
+    printf("('!' marks a plan whose status was not ok)\n\n");
+    printf("10 spheres, larger clouds (median of %d runs)\n",
+           repeats > 3 ? 3 : repeats);
+    for (i = 0; i < 3; i++) {
+        run_cell(10, (int)big[i], repeats > 3 ? 3 : repeats, &c);
+        printf("  %8ld points/sphere: %9.2f ms (convert %.2f, search %.2f), "
+               "%s\n", c.points / 10, c.median_ms, c.convert_ms, c.search_ms,
+               c.status);
+        if (csv)
+            fprintf(csv, "10,%ld,%ld,%s,%.4f,%.4f,%.4f,%.4f,%ld,%ld,,\n",
+                    big[i], c.points, c.status, c.median_ms, c.min_ms,
+                    c.convert_ms, c.search_ms, c.blocked, c.expanded);
+    }
+    if (csv)
+        fclose(csv);
+    return 0;
+}
