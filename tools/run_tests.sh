@@ -17,8 +17,8 @@ run_suite() { # name builddir cmake-args...
     shift 2
     echo "== $name"
     if ! cmake -S . -B "$dir" $gen "$@" >/dev/null ||
-        ! cmake --build "$dir" -j "$jobs" >"$dir.log" 2>&1; then
-        cat "$dir.log"
+        ! cmake --build "$dir" -j "$jobs" >"$dir/build.log" 2>&1; then
+        tail -50 "$dir/build.log"
         echo "$name: build failed"
         failed=$((failed + 1))
         return
@@ -39,7 +39,7 @@ run_suite() { # name builddir cmake-args...
 
 run_suite "release build" build -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQRT_PYTHON_TESTS=ON
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
-    run_suite "ASan + UBSan build" build-asan -DCMAKE_BUILD_TYPE=Debug \
+    run_suite "ASan + UBSan build" build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DQRT_SANITIZE=ON -DQRT_PYTHON_TESTS=ON
 
 echo "== libFuzzer: scene and PCD readers, ${fuzz_seconds} s"

@@ -337,6 +337,20 @@ static int emit_route(struct qrt_planner *pl, const double s[3],
     return 1;
 }
 
+static double route_length(const struct qrt_planner *pl, const double s[3],
+                           const double g[3], long len)
+{
+    double a[3], b[3], total = 0.0;
+    long i;
+    route_point(pl, s, g, len, 0, a);
+    for (i = 1; i <= len + 1; i++) {
+        route_point(pl, s, g, len, i, b);
+        total += qrt_arm_joint_distance(&pl->params.arm, a, b);
+        copy_joints(a, b);
+    }
+    return total;
+}
+
 static double route_cost(const struct qrt_planner *pl,
                          const struct qrt_plan *plan)
 {
@@ -443,7 +457,9 @@ int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
         return QRT_OK;
     }
     len = qrt_search_path(pl, res.goal_node);
-    plan->lattice_cost_deg = res.cost;
+    /* the search adds float costs; the route's length in double is what
+     * the simplified path is compared with */
+    plan->lattice_cost_deg = route_length(pl, qs, qg, len);
     plan->lattice_path_nodes = len;
     plan->start_node = pl->heap[0].node;
     plan->goal_node = res.goal_node;
