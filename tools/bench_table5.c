@@ -133,7 +133,7 @@ int main(int argc, char **argv)
             single_k = atoi(argv[++i]);
         } else {
             fprintf(stderr, "usage: bench_table5 [--repeats R] [--quick] "
-                    "[--csv FILE] [--single SPHERES POINTS]\n");
+                            "[--csv FILE] [--single SPHERES POINTS]\n");
             return 2;
         }
     }
@@ -152,10 +152,11 @@ int main(int argc, char **argv)
     }
     if (csv)
         fprintf(csv, "spheres,points_per_sphere,points,status,median_ms,"
-                "min_ms,convert_ms,search_ms,cells_blocked,nodes_expanded,"
-                "paper_s,speedup\n");
+                     "min_ms,convert_ms,search_ms,cells_blocked,nodes_expanded,"
+                     "paper_s,speedup\n");
     printf("Table 5: end-to-end plan time, median of %d runs, ms "
-           "(paper's seconds in brackets, speed-up below)\n", repeats);
+           "(paper's seconds in brackets, speed-up below)\n",
+           repeats);
     printf("%7s", "spheres");
     for (k = 0; k < 9; k++)
         printf(" %13d", table_points[k]);
@@ -170,10 +171,12 @@ int main(int argc, char **argv)
                    strcmp(c.status, "ok") ? "!" : "");
             fflush(stdout);
             if (csv)
-                fprintf(csv, "%d,%d,%ld,%s,%.4f,%.4f,%.4f,%.4f,%ld,%ld,%.3f,"
-                        "%.1f\n", n, table_points[k], c.points, c.status,
-                        c.median_ms, c.min_ms, c.convert_ms, c.search_ms,
-                        c.blocked, c.expanded, paper_s[n - 1][k], speed[k]);
+                fprintf(csv,
+                        "%d,%d,%ld,%s,%.4f,%.4f,%.4f,%.4f,%ld,%ld,%.3f,"
+                        "%.1f\n",
+                        n, table_points[k], c.points, c.status, c.median_ms,
+                        c.min_ms, c.convert_ms, c.search_ms, c.blocked,
+                        c.expanded, paper_s[n - 1][k], speed[k]);
         }
         printf("\n%7s", "x");
         for (k = 0; k < 9; k++)
@@ -186,8 +189,8 @@ int main(int argc, char **argv)
     for (i = 0; i < 3; i++) {
         run_cell(10, (int)big[i], repeats > 3 ? 3 : repeats, &c);
         printf("  %8ld points/sphere: %9.2f ms (convert %.2f, search %.2f), "
-               "%s\n", c.points / 10, c.median_ms, c.convert_ms, c.search_ms,
-               c.status);
+               "%s\n",
+               c.points / 10, c.median_ms, c.convert_ms, c.search_ms, c.status);
         if (csv)
             fprintf(csv, "10,%ld,%ld,%s,%.4f,%.4f,%.4f,%.4f,%ld,%ld,,\n",
                     big[i], c.points, c.status, c.median_ms, c.min_ms,

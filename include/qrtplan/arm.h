@@ -10,9 +10,9 @@ extern "C" {
 enum { QRT_ALPHA = 0, QRT_SIGMA = 1, QRT_ETA = 2 };
 
 struct qrt_arm {
-    double link_m[3];         /* L1, L2, L3 */
-    double link_radius_m[3];  /* capsule radius of each link */
-    double limit_deg[3][2];   /* [joint][lo, hi]; alpha wraps iff [-180, 180] */
+    double link_m[3];        /* L1, L2, L3 */
+    double link_radius_m[3]; /* capsule radius of each link */
+    double limit_deg[3][2];  /* [joint][lo, hi]; alpha wraps iff [-180, 180] */
 };
 
 /* Table 1 of the paper, radii 0.02 m, limits of design.md section 3. */

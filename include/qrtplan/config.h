@@ -40,9 +40,9 @@
 
 /* Lattice dimensions for the default joint limits at the finest grid; these
  * bound the lattice of any scene. */
-#define QRT_MAX_NA (360 / QRT_GRID_DEG_MIN)      /* alpha wraps: -180 == 180 */
-#define QRT_MAX_NS (220 / QRT_GRID_DEG_MIN + 1)  /* sigma -40 .. 180 */
-#define QRT_MAX_NE (320 / QRT_GRID_DEG_MIN + 1)  /* eta -180 .. 140 */
+#define QRT_MAX_NA (360 / QRT_GRID_DEG_MIN)     /* alpha wraps: -180 == 180 */
+#define QRT_MAX_NS (220 / QRT_GRID_DEG_MIN + 1) /* sigma -40 .. 180 */
+#define QRT_MAX_NE (320 / QRT_GRID_DEG_MIN + 1) /* eta -180 .. 140 */
 #define QRT_MAX_NODES ((long)QRT_MAX_NA * QRT_MAX_NS * QRT_MAX_NE)
 /* 64-bit words per eta row of the obstacle mask. */
 #define QRT_ROW_WORDS ((QRT_MAX_NE + 63) / 64)

@@ -20,10 +20,10 @@ extern "C" {
 #endif
 
 struct qrt_lattice {
-    int n[3];            /* nodes along alpha, sigma, eta */
-    int alpha_wraps;     /* node n[0] is node 0 again */
+    int n[3];        /* nodes along alpha, sigma, eta */
+    int alpha_wraps; /* node n[0] is node 0 again */
     double grid_deg;
-    double lo_deg[3];    /* joint value of node 0 on each axis */
+    double lo_deg[3]; /* joint value of node 0 on each axis */
 };
 
 struct qrt_mask {

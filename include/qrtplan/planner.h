@@ -51,24 +51,24 @@ struct qrt_target {
 
 struct qrt_plan {
     enum qrt_plan_status status;
-    const char *detail;       /* one English sentence on the status */
-    int n_waypoints;          /* > 0 only when status is QRT_STATUS_OK */
+    const char *detail; /* one English sentence on the status */
+    int n_waypoints;    /* > 0 only when status is QRT_STATUS_OK */
     double waypoints_deg[QRT_MAX_WAYPOINTS][3];
-    double cost_deg;          /* length of the returned path */
-    double lattice_cost_deg;  /* optimal cost through the lattice, including
-                                 the start and goal connections */
-    double start_deg[3];      /* the start and goal as joints (after IK) */
+    double cost_deg;         /* length of the returned path */
+    double lattice_cost_deg; /* optimal cost through the lattice, including
+                                the start and goal connections */
+    double start_deg[3];     /* the start and goal as joints (after IK) */
     double goal_deg[3];
     long start_node, goal_node; /* lattice nodes the path enters and leaves */
     long lattice_path_nodes;
     long nodes_expanded;
     long cells_blocked;
     long points, points_ignored, points_dropped;
-    double voxel_m;           /* 0 while points are exact */
+    double voxel_m; /* 0 while points are exact */
 };
 
 struct qrt_heap_entry {
-    float key;    /* cost so far plus the A* estimate */
+    float key; /* cost so far plus the A* estimate */
     int32_t node;
 };
 
@@ -78,11 +78,11 @@ struct qrt_planner {
     struct qrt_mask mask;
     double radius_m[3]; /* per-link collision radius the mask was built for */
     long cells_blocked;
-    int mask_stale;     /* points changed since the mask was built */
+    int mask_stale; /* points changed since the mask was built */
     /* search scratch, one entry per lattice node */
     float dist[QRT_MAX_NODES];
     struct qrt_heap_entry heap[QRT_MAX_NODES]; /* later holds the path */
-    int32_t heap_pos[QRT_MAX_NODES]; /* -1 unseen, -2 closed */
+    int32_t heap_pos[QRT_MAX_NODES];           /* -1 unseen, -2 closed */
     uint8_t parent_dir[QRT_MAX_NODES];
 };
 

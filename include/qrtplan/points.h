@@ -30,12 +30,12 @@ extern "C" {
 struct qrt_points {
     float xyz[QRT_MAX_POINTS][3];
     uint32_t hash[QRT_POINT_HASH_SLOTS]; /* voxel mode: entry index + 1 */
-    long count;          /* entries in xyz */
-    long received;       /* points passed to qrt_points_add since reset */
-    long ignored_far;    /* beyond reach_m */
-    long dropped;        /* lost to capacity: non-zero means do not plan */
-    double voxel_m;      /* 0 while exact, else the voxel edge in use */
-    double reach_m;      /* points farther than this are ignored */
+    long count;                          /* entries in xyz */
+    long received;    /* points passed to qrt_points_add since reset */
+    long ignored_far; /* beyond reach_m */
+    long dropped;     /* lost to capacity: non-zero means do not plan */
+    double voxel_m;   /* 0 while exact, else the voxel edge in use */
+    double reach_m;   /* points farther than this are ignored */
 };
 
 /* Empty the table. reach_m: points with |p| > reach_m are ignored; pass

@@ -3,12 +3,12 @@
 #define QRT_CLI_GEN_H
 
 struct sphere_layout {
-    int spheres;        /* n */
-    int points;         /* inspection points per sphere, k*k */
-    double radius_m;    /* L of Eq. 13 */
-    double distance_m;  /* centres this far from the base axis */
-    double height_m;    /* centres at this z */
-    double phase_deg;   /* bearing of the first centre */
+    int spheres;       /* n */
+    int points;        /* inspection points per sphere, k*k */
+    double radius_m;   /* L of Eq. 13 */
+    double distance_m; /* centres this far from the base axis */
+    double height_m;   /* centres at this z */
+    double phase_deg;  /* bearing of the first centre */
 };
 
 void sphere_layout_default(struct sphere_layout *L);

@@ -197,16 +197,29 @@ static char *parse_string(struct reader *r)
         }
         c = (unsigned char)r->s[r->pos++];
         switch (c) {
-        case '"': case '\\': case '/':
+        case '"':
+        case '\\':
+        case '/':
             buf[n++] = (char)c;
             break;
-        case 'b': buf[n++] = '\b'; break;
-        case 'f': buf[n++] = '\f'; break;
-        case 'n': buf[n++] = '\n'; break;
-        case 'r': buf[n++] = '\r'; break;
-        case 't': buf[n++] = '\t'; break;
+        case 'b':
+            buf[n++] = '\b';
+            break;
+        case 'f':
+            buf[n++] = '\f';
+            break;
+        case 'n':
+            buf[n++] = '\n';
+            break;
+        case 'r':
+            buf[n++] = '\r';
+            break;
+        case 't':
+            buf[n++] = '\t';
+            break;
         case 'u':
-            if (!read_hex4(r, &cp) || cp == 0 || (cp >= 0xD800 && cp < 0xE000)) {
+            if (!read_hex4(r, &cp) || cp == 0 ||
+                (cp >= 0xD800 && cp < 0xE000)) {
                 if (!r->failed)
                     fail(r, "\\u escape not supported here (NUL or surrogate)");
                 free(buf);
@@ -246,6 +259,26 @@ static int push(struct reader *r, struct json **items, size_t *count,
 
 static void free_children(struct json *j);
 
+/* After an array item or object member: 1 if another follows (a comma
+ * was eaten), 0 if close ends the container (eaten too), -1 on error. */
+static int next_item(struct reader *r, char close, const char *what)
+{
+    skip_space(r);
+    if (peek(r) == ',') {
+        r->pos++;
+        return 1;
+    }
+    if (peek(r) == close) {
+        r->pos++;
+        return 0;
+    }
+    if (peek(r) < 0)
+        fail(r, "unexpected end of input in %s", what);
+    else
+        fail(r, "expected ',' or '%c' in %s", close, what);
+    return -1;
+}
+
 static int parse_array(struct reader *r, struct json *out, int depth)
 {
     size_t cap = 0;
@@ -264,18 +297,14 @@ static int parse_array(struct reader *r, struct json *out, int depth)
             free_children(&v);
             return 0;
         }
-        skip_space(r);
-        if (peek(r) == ',') {
-            r->pos++;
+        switch (next_item(r, ']', "array")) {
+        case 1:
             continue;
-        }
-        if (peek(r) == ']') {
-            r->pos++;
+        case 0:
             return 1;
+        default:
+            return 0;
         }
-        fail(r, peek(r) < 0 ? "unexpected end of input in array"
-                            : "expected ',' or ']' in array");
-        return 0;
     }
 }
 
@@ -338,18 +367,14 @@ static int parse_object(struct reader *r, struct json *out, int depth)
             free_children(&v);
             return 0;
         }
-        skip_space(r);
-        if (peek(r) == ',') {
-            r->pos++;
+        switch (next_item(r, '}', "object")) {
+        case 1:
             continue;
-        }
-        if (peek(r) == '}') {
-            r->pos++;
+        case 0:
             return 1;
+        default:
+            return 0;
         }
-        fail(r, peek(r) < 0 ? "unexpected end of input in object"
-                            : "expected ',' or '}' in object");
-        return 0;
     }
 }
 
@@ -413,8 +438,7 @@ void json_free(struct json *j)
     free(j);
 }
 
-struct json *json_parse(const char *text, size_t len, char *err,
-                        size_t err_len)
+struct json *json_parse(const char *text, size_t len, char *err, size_t err_len)
 {
     struct reader r;
     struct json *root = calloc(1, sizeof *root);

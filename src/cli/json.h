@@ -16,11 +16,11 @@ enum json_type {
 
 struct json {
     enum json_type type;
-    size_t count;          /* items of an array or object */
-    double number;         /* JSON_NUMBER; also 0/1 for JSON_BOOL */
-    char *string;          /* JSON_STRING (NUL-terminated, no NUL inside) */
-    struct json *items;    /* JSON_ARRAY and JSON_OBJECT values */
-    char **keys;           /* JSON_OBJECT keys, parallel to items */
+    size_t count;       /* items of an array or object */
+    double number;      /* JSON_NUMBER; also 0/1 for JSON_BOOL */
+    char *string;       /* JSON_STRING (NUL-terminated, no NUL inside) */
+    struct json *items; /* JSON_ARRAY and JSON_OBJECT values */
+    char **keys;        /* JSON_OBJECT keys, parallel to items */
 };
 
 /* Nesting deeper than this is refused (a scene needs 4). */

@@ -11,10 +11,13 @@
 #include "scene.h"
 
 static const char usage[] =
-    "usage: qrtplan plan SCENE.json [-o PLAN.json] [--dijkstra] [--no-simplify]\n"
+    "usage: qrtplan plan SCENE.json [-o PLAN.json] [--dijkstra] "
+    "[--no-simplify]\n"
     "       qrtplan mask SCENE.json [-o MASK.json]\n"
-    "       qrtplan gen [--spheres N] [--points K] [--radius R] [--distance D]\n"
-    "                   [--height Z] [--phase DEG] [--start A,S,E] [--goal A,S,E]\n"
+    "       qrtplan gen [--spheres N] [--points K] [--radius R] [--distance "
+    "D]\n"
+    "                   [--height Z] [--phase DEG] [--start A,S,E] [--goal "
+    "A,S,E]\n"
     "                   [--pcd FILE | --pcd-ascii FILE] [-o SCENE.json]\n"
     "       qrtplan --help | --version\n";
 
@@ -22,21 +25,28 @@ static const char help[] =
     "\n"
     "plan   Read a scene (design.md section 5: arm, margins, grid_deg, points\n"
     "       and/or a PCD points_file, start and goal as joints_deg or xyz_m),\n"
-    "       build the C-space mask and plan. Writes the plan as JSON to PLAN.json\n"
-    "       or stdout. Exit 0 for every well-formed scene, whatever the plan's\n"
+    "       build the C-space mask and plan. Writes the plan as JSON to "
+    "PLAN.json\n"
+    "       or stdout. Exit 0 for every well-formed scene, whatever the "
+    "plan's\n"
     "       status (ok, no_path, start_blocked, goal_blocked, unreachable,\n"
-    "       capacity); exit 2 with one line on stderr for input it cannot use.\n"
-    "       --dijkstra      plain Dijkstra instead of A* (same cost, more work)\n"
+    "       capacity); exit 2 with one line on stderr for input it cannot "
+    "use.\n"
+    "       --dijkstra      plain Dijkstra instead of A* (same cost, more "
+    "work)\n"
     "       --no-simplify   return the lattice path without shortcuts\n"
     "mask   Write the scene's blocked lattice nodes as JSON (index =\n"
     "       (ia*ns + is)*ne + ie; node joints = lo_deg + i*grid_deg).\n"
-    "gen    Write a scene of the paper's obstacle family (its Eq. 13, Fig. 17):\n"
+    "gen    Write a scene of the paper's obstacle family (its Eq. 13, Fig. "
+    "17):\n"
     "       N spheres (default 1) of radius R (0.1 m), centres on a circle of\n"
     "       radius D (0.6 m) around the base at height Z (0 m), the first at\n"
-    "       bearing DEG (180: behind the arm) and the rest every 360/N degrees;\n"
+    "       bearing DEG (180: behind the arm) and the rest every 360/N "
+    "degrees;\n"
     "       K points per sphere (1444) as k*k samples of Eq. 13's two angles,\n"
     "       k = round(sqrt(K)). Start (-100,0,0) and goal (100,0,0) unless\n"
-    "       given. With --pcd the points go to a binary PCD file that the scene\n"
+    "       given. With --pcd the points go to a binary PCD file that the "
+    "scene\n"
     "       names in points_file (--pcd-ascii: ASCII PCD).\n";
 
 static int fail(const char *file, const char *msg)
@@ -183,10 +193,12 @@ static int write_pcd(const char *path, const double *xyz, long n, int ascii)
     long i;
     if (!f)
         return -1;
-    fprintf(f, "# .PCD v0.7 - written by qrtplan gen\nVERSION 0.7\n"
+    fprintf(f,
+            "# .PCD v0.7 - written by qrtplan gen\nVERSION 0.7\n"
             "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
             "WIDTH %ld\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS %ld\n"
-            "DATA %s\n", n, n, ascii ? "ascii" : "binary");
+            "DATA %s\n",
+            n, n, ascii ? "ascii" : "binary");
     for (i = 0; i < n; i++) {
         float p[3];
         p[0] = (float)xyz[3 * i];
@@ -249,7 +261,8 @@ static int cmd_gen(int argc, char **argv)
     }
     if (L.spheres < 1 || L.spheres > 1000 || L.points < 4 ||
         L.points > 100000000 || L.radius_m <= 0.0)
-        return fail(NULL, "gen: need 1..1000 spheres, 4..1e8 points, radius > 0");
+        return fail(NULL,
+                    "gen: need 1..1000 spheres, 4..1e8 points, radius > 0");
     n = sphere_layout_count(&L);
     xyz = malloc((size_t)n * 3 * sizeof *xyz);
     if (!xyz)
@@ -264,19 +277,22 @@ static int cmd_gen(int argc, char **argv)
         free(xyz);
         return fail(out_path, "cannot open for writing");
     }
-    fprintf(out, "{\n  \"version\": 1,\n  \"name\": \"%d sphere(s) x %ld "
-            "points (paper Eq. 13)\",\n", L.spheres, n / L.spheres);
+    fprintf(out,
+            "{\n  \"version\": 1,\n  \"name\": \"%d sphere(s) x %ld "
+            "points (paper Eq. 13)\",\n",
+            L.spheres, n / L.spheres);
     if (pcd_path) {
         fprintf(out, "  \"points_file\": \"%s\",\n", base_name(pcd_path));
     } else {
         fprintf(out, "  \"points\": [");
         for (i = 0; i < n; i++)
-            fprintf(out, "%s[%.6f, %.6f, %.6f]", i ? (i % 4 ? ", " : ",\n    ")
-                                                   : "\n    ",
-                    xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
+            fprintf(out, "%s[%.6f, %.6f, %.6f]",
+                    i ? (i % 4 ? ", " : ",\n    ") : "\n    ", xyz[3 * i],
+                    xyz[3 * i + 1], xyz[3 * i + 2]);
         fprintf(out, "\n  ],\n");
     }
-    fprintf(out, "  \"start\": {\"joints_deg\": [%g, %g, %g]},\n"
+    fprintf(out,
+            "  \"start\": {\"joints_deg\": [%g, %g, %g]},\n"
             "  \"goal\": {\"joints_deg\": [%g, %g, %g]}\n}\n",
             start[0], start[1], start[2], goal[0], goal[1], goal[2]);
     free(xyz);

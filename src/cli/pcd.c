@@ -140,8 +140,10 @@ static int parse_header(const char *buf, size_t len, size_t *pos,
             } else if (strcmp(kind, "binary") == 0) {
                 h->binary = 1;
             } else {
-                snprintf(err, err_len, "DATA %s is not supported (ascii or "
-                         "binary only)", kind);
+                snprintf(err, err_len,
+                         "DATA %s is not supported (ascii or "
+                         "binary only)",
+                         kind);
                 return -1;
             }
             return 0;
@@ -218,8 +220,10 @@ static int read_binary(const char *data, size_t avail,
     long i;
     int k;
     if (L->row_bytes == 0 || avail / L->row_bytes < (size_t)n) {
-        snprintf(err, err_len, "binary data truncated: %ld points need %zu "
-                 "bytes, file has %zu", n, (size_t)n * L->row_bytes, avail);
+        snprintf(err, err_len,
+                 "binary data truncated: %ld points need %zu "
+                 "bytes, file has %zu",
+                 n, (size_t)n * L->row_bytes, avail);
         return -1;
     }
     for (i = 0; i < n; i++) {
@@ -258,12 +262,15 @@ static int read_ascii(const char *buf, size_t len, size_t pos,
             while (pos < len && (buf[pos] == ' ' || buf[pos] == '\t' ||
                                  buf[pos] == '\r' || buf[pos] == '\n'))
                 pos++;
-            while (pos < len && !strchr(" \t\r\n", buf[pos]) && t + 1 < sizeof tmp)
+            while (pos < len && !strchr(" \t\r\n", buf[pos]) &&
+                   t + 1 < sizeof tmp)
                 tmp[t++] = buf[pos++];
             tmp[t] = '\0';
             if (t == 0) {
-                snprintf(err, err_len, "ascii data truncated at point %ld of "
-                         "%ld", i, n);
+                snprintf(err, err_len,
+                         "ascii data truncated at point %ld of "
+                         "%ld",
+                         i, n);
                 return -1;
             }
             d = strtod(tmp, &end);
@@ -303,16 +310,20 @@ int pcd_parse(const char *buf, size_t len, double **xyz_out, long *n_out,
     if (h.points < 0)
         h.points = h.width * h.height;
     if (h.width * h.height != h.points) {
-        snprintf(err, err_len, "WIDTH x HEIGHT (%ld x %ld) differs from "
-                 "POINTS %ld", h.width, h.height, h.points);
+        snprintf(err, err_len,
+                 "WIDTH x HEIGHT (%ld x %ld) differs from "
+                 "POINTS %ld",
+                 h.width, h.height, h.points);
         return -1;
     }
     n = h.points;
     if (n == 0)
         return 0;
     if (h.binary && L.row_bytes * (size_t)n > len - pos) {
-        snprintf(err, err_len, "binary data truncated: %ld points need %zu "
-                 "bytes, file has %zu", n, (size_t)n * L.row_bytes, len - pos);
+        snprintf(err, err_len,
+                 "binary data truncated: %ld points need %zu "
+                 "bytes, file has %zu",
+                 n, (size_t)n * L.row_bytes, len - pos);
         return -1;
     }
     if (!h.binary && (size_t)n > len - pos) { /* each point needs a byte */

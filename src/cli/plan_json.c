@@ -12,7 +12,8 @@ void plan_write_json(FILE *out, const struct qrt_plan *plan,
     fprintf(out, "{\n  \"version\": 1,\n  \"status\": \"%s\",\n",
             qrt_plan_status_name(plan->status));
     if (plan->status == QRT_STATUS_CAPACITY && plan->points_dropped > 0)
-        fprintf(out, "  \"detail\": \"%ld obstacle points dropped: more than "
+        fprintf(out,
+                "  \"detail\": \"%ld obstacle points dropped: more than "
                 "the point table holds even as %.0f mm voxels; not planning "
                 "on a partial cloud\",\n",
                 plan->points_dropped, 1000.0 * plan->voxel_m);
@@ -37,14 +38,16 @@ void plan_write_json(FILE *out, const struct qrt_plan *plan,
             fprintf(out, ",\n");
         }
     }
-    fprintf(out, "  \"stats\": {\"points\": %ld, \"points_ignored\": %ld, "
+    fprintf(out,
+            "  \"stats\": {\"points\": %ld, \"points_ignored\": %ld, "
             "\"points_dropped\": %ld, \"voxel_m\": %g, \"cells_blocked\": %ld, "
             "\"nodes_expanded\": %ld, ",
             plan->points, plan->points_ignored, plan->points_dropped,
             plan->voxel_m, plan->cells_blocked, plan->nodes_expanded);
     if (ok)
         fprintf(out, "\"lattice_cost_deg\": %.6f, ", plan->lattice_cost_deg);
-    fprintf(out, "\"lattice_path_nodes\": %ld, \"start_node\": %ld, "
+    fprintf(out,
+            "\"lattice_path_nodes\": %ld, \"start_node\": %ld, "
             "\"goal_node\": %ld,\n    \"time_us\": {\"convert\": %ld, "
             "\"search\": %ld, \"total\": %ld}}\n}\n",
             plan->lattice_path_nodes, plan->start_node, plan->goal_node,
@@ -55,7 +58,8 @@ void mask_write_json(FILE *out, const struct qrt_mask *mask)
 {
     const struct qrt_lattice *lat = &mask->lat;
     long n = qrt_lattice_node_count(lat), i, written = 0;
-    fprintf(out, "{\"version\": 1, \"grid_deg\": %g, \"n\": [%d, %d, %d], "
+    fprintf(out,
+            "{\"version\": 1, \"grid_deg\": %g, \"n\": [%d, %d, %d], "
             "\"lo_deg\": [%g, %g, %g], \"alpha_wraps\": %s, "
             "\"cells_blocked\": %ld,\n \"blocked\": [",
             lat->grid_deg, lat->n[0], lat->n[1], lat->n[2], lat->lo_deg[0],
@@ -63,6 +67,7 @@ void mask_write_json(FILE *out, const struct qrt_mask *mask)
             qrt_mask_count_blocked(mask));
     for (i = 0; i < n; i++)
         if (qrt_mask_blocked_index(mask, i))
-            fprintf(out, "%s%ld", written++ % 16 ? ", " : (written > 1 ? ",\n  " : ""), i);
+            fprintf(out, "%s%ld",
+                    written++ % 16 ? ", " : (written > 1 ? ",\n  " : ""), i);
     fprintf(out, "]}\n");
 }

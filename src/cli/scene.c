@@ -128,8 +128,8 @@ static int only_keys(const struct json *obj, const char *what,
 static int parse_arm(const struct json *arm, struct qrt_arm *out, char *err,
                      size_t err_len)
 {
-    static const char *const keys[] = {"links_m", "link_radius_m",
-                                       "limits_deg", NULL};
+    static const char *const keys[] = {"links_m", "link_radius_m", "limits_deg",
+                                       NULL};
     const struct json *v;
     int j;
     if (arm->type != JSON_OBJECT) {
@@ -182,8 +182,10 @@ static int parse_target(const struct json *root, const char *key,
         return -1;
     }
     if (v->type != JSON_OBJECT) {
-        snprintf(err, err_len, "%s must be an object with joints_deg or "
-                 "xyz_m", key);
+        snprintf(err, err_len,
+                 "%s must be an object with joints_deg or "
+                 "xyz_m",
+                 key);
         return -1;
     }
     if (only_keys(v, key, keys, err, err_len))
@@ -208,8 +210,8 @@ static int parse_target(const struct json *root, const char *key,
     return 0;
 }
 
-static int append_points(struct scene *sc, const double *xyz, long n,
-                         char *err, size_t err_len)
+static int append_points(struct scene *sc, const double *xyz, long n, char *err,
+                         size_t err_len)
 {
     double *grown;
     if (n == 0)
@@ -243,8 +245,7 @@ static int parse_inline_points(const struct json *v, struct scene *sc,
         char what[48];
         snprintf(what, sizeof what, "points[%zu]", i);
         if (get_numbers(&v->items[i], what, 3, -HUGE_VAL, HUGE_VAL,
-                        sc->points + 3 * i,
-                        err, err_len))
+                        sc->points + 3 * i, err, err_len))
             return -1;
     }
     sc->n_points = (long)v->count;
@@ -285,8 +286,10 @@ int scene_parse(const char *text, size_t len, const char *base_dir,
                 struct scene *sc, char *err, size_t err_len)
 {
     static const char *const keys[] = {
-        "version", "name", "comment", "arm", "margin_m", "cspace_margin_deg",
-        "grid_deg", "points", "points_file", "start", "goal", NULL};
+        "version",  "name",     "comment",
+        "arm",      "margin_m", "cspace_margin_deg",
+        "grid_deg", "points",   "points_file",
+        "start",    "goal",     NULL};
     const struct json *v;
     struct json *root;
     char jerr[200];
@@ -310,8 +313,8 @@ int scene_parse(const char *text, size_t len, const char *base_dir,
         snprintf(err, err_len, "version must be 1");
         goto out;
     }
-    if ((v = json_get(root, "arm")) && parse_arm(v, &sc->params.arm, err,
-                                                 err_len))
+    if ((v = json_get(root, "arm")) &&
+        parse_arm(v, &sc->params.arm, err, err_len))
         goto out;
     if (get_number(root, "margin_m", 0.0, 10.0, &sc->params.margin_m, err,
                    err_len) ||

@@ -80,8 +80,7 @@ void qrt_arm_fk(const struct qrt_arm *arm, const double joints_deg[3],
 
 /* Planar two-link IK for the point (u, z) seen from the shoulder; writes up
  * to two (sigma, eta) pairs in degrees. */
-static int ik_planar(double l2, double l3, double u, double z,
-                     double out[2][2])
+static int ik_planar(double l2, double l3, double u, double z, double out[2][2])
 {
     double d2 = u * u + z * z;
     double c = (d2 - l2 * l2 - l3 * l3) / (2.0 * l2 * l3);
@@ -109,8 +108,8 @@ int qrt_arm_ik(const struct qrt_arm *arm, const double xyz_m[3],
                double alpha_hint_deg, double sol_deg[4][3])
 {
     double rho = hypot(xyz_m[0], xyz_m[1]);
-    double phi = rho > 0.0 ? atan2(xyz_m[1], xyz_m[0]) / QRT_DEG
-                           : alpha_hint_deg;
+    double phi =
+        rho > 0.0 ? atan2(xyz_m[1], xyz_m[0]) / QRT_DEG : alpha_hint_deg;
     int side, n = 0;
     for (side = 0; side < 2; side++) {
         /* alpha toward the point (u = rho - L1) or away (u = -rho - L1) */

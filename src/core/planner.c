@@ -101,8 +101,8 @@ int qrt_planner_build_mask(struct qrt_planner *pl)
     long i;
     int k;
     for (k = 0; k < 3; k++)
-        pl->radius_m[k] = pl->params.arm.link_radius_m[k] +
-                          pl->params.margin_m + inflation;
+        pl->radius_m[k] =
+            pl->params.arm.link_radius_m[k] + pl->params.margin_m + inflation;
     qrt_raster_begin(&r, &pl->mask, &pl->params.arm, pl->radius_m,
                      pl->params.cspace_margin_deg);
     /* the search's heap_pos is idle until the next search: lend it */
@@ -111,8 +111,7 @@ int qrt_planner_build_mask(struct qrt_planner *pl)
         ctx.raster = &r;
         ctx.pts = (const float(*)[3])pl->points.xyz;
         qrt_cluster_points(ctx.pts, pl->points.count, CLUSTER_CELL_M,
-                           QRT_CLUSTER_MAX, pl->heap_pos, raster_cluster,
-                           &ctx);
+                           QRT_CLUSTER_MAX, pl->heap_pos, raster_cluster, &ctx);
     } else {
         for (i = 0; i < pl->points.count; i++) {
             double p[3];
@@ -357,9 +356,9 @@ static double route_cost(const struct qrt_planner *pl,
     double cost = 0.0;
     int i;
     for (i = 1; i < plan->n_waypoints; i++)
-        cost += qrt_arm_joint_distance(&pl->params.arm,
-                                       plan->waypoints_deg[i - 1],
-                                       plan->waypoints_deg[i]);
+        cost +=
+            qrt_arm_joint_distance(&pl->params.arm, plan->waypoints_deg[i - 1],
+                                   plan->waypoints_deg[i]);
     return cost;
 }
 

@@ -188,8 +188,8 @@ static void trig_extremes(const struct qrt_raster *r, double cos_c,
     double c1 = cos_c * r->cos_h - sin_c * r->sin_h; /* cos(c + h) */
     double s0 = fabs(sin_c * r->cos_h - cos_c * r->sin_h);
     double s1 = fabs(sin_c * r->cos_h + cos_c * r->sin_h);
-    int has_zero = cos_c >= r->cos_h;  /* |c| <= h */
-    int has_pi = cos_c <= -r->cos_h;   /* pi - |c| <= h */
+    int has_zero = cos_c >= r->cos_h; /* |c| <= h */
+    int has_pi = cos_c <= -r->cos_h;  /* pi - |c| <= h */
     *abs_sin_min = (has_zero || has_pi) ? 0.0 : (s0 < s1 ? s0 : s1);
     *cos_max = has_zero ? 1.0 : (c0 > c1 ? c0 : c1);
     *cos_min = has_pi ? -1.0 : (c0 < c1 ? c0 : c1);

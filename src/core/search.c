@@ -25,8 +25,7 @@ static int heap_less(const struct qrt_heap_entry *a,
     return a->key < b->key || (a->key == b->key && a->node < b->node);
 }
 
-static void heap_place(struct qrt_planner *pl, long i,
-                       struct qrt_heap_entry e)
+static void heap_place(struct qrt_planner *pl, long i, struct qrt_heap_entry e)
 {
     pl->heap[i] = e;
     pl->heap_pos[e.node] = (int32_t)i;
@@ -60,6 +59,23 @@ static void sift_down(struct qrt_planner *pl, long i, long size)
         i = c;
     }
     heap_place(pl, i, e);
+}
+
+/* Put node on the heap with key, or lower its key if it is there (a key
+ * only ever decreases: Dijkstra's decrease-key). */
+static void push_or_lower(struct qrt_planner *pl, long *size, long node,
+                          float key)
+{
+    struct qrt_heap_entry e;
+    e.key = key;
+    e.node = (int32_t)node;
+    if (pl->heap_pos[node] >= 0) {
+        pl->heap[pl->heap_pos[node]] = e;
+        sift_up(pl, pl->heap_pos[node]);
+    } else {
+        pl->heap[*size] = e;
+        sift_up(pl, (*size)++);
+    }
 }
 
 /* Length of the shortest obstacle-free 26-neighbour path, in cells: the
@@ -176,8 +192,8 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
     for (d = 0; d < 26; d++) {
         int moved;
         qrt_search_direction(d, offsets[d]);
-        moved = (offsets[d][0] != 0) + (offsets[d][1] != 0) +
-                (offsets[d][2] != 0);
+        moved =
+            (offsets[d][0] != 0) + (offsets[d][1] != 0) + (offsets[d][2] != 0);
         dir_cost[d] = (float)(lat->grid_deg * sqrt((double)moved));
     }
     init_estimate(&est, lat, goals, use_astar);
@@ -191,21 +207,13 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
     for (i = 0; i < seeds->count; i++) {
         long node = seeds->node[i];
         int ijk[3];
-        struct qrt_heap_entry e;
         qrt_lattice_coords(lat, node, ijk);
         if (pl->heap_pos[node] >= 0 && pl->dist[node] <= seeds->cost[i])
             continue;
         pl->dist[node] = (float)seeds->cost[i];
         pl->parent_dir[node] = QRT_NO_PARENT;
-        e.key = (float)(seeds->cost[i] + estimate_at(&est, lat, ijk));
-        e.node = (int32_t)node;
-        if (pl->heap_pos[node] >= 0) {
-            pl->heap[pl->heap_pos[node]] = e;
-            sift_up(pl, pl->heap_pos[node]);
-        } else {
-            pl->heap[size] = e;
-            sift_up(pl, size++);
-        }
+        push_or_lower(pl, &size, node,
+                      (float)(seeds->cost[i] + estimate_at(&est, lat, ijk)));
     }
 
     while (size > 0) {
@@ -233,23 +241,16 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
             int nb[3];
             long v = neighbour(lat, ijk, offsets[d], nb);
             float g;
-            struct qrt_heap_entry e;
-            if (v < 0 || pl->heap_pos[v] == -2 || qrt_mask_blocked(&pl->mask, nb))
+            if (v < 0 || pl->heap_pos[v] == -2 ||
+                qrt_mask_blocked(&pl->mask, nb))
                 continue;
             g = pl->dist[u] + dir_cost[d];
             if (pl->heap_pos[v] >= 0 && pl->dist[v] <= g)
                 continue;
             pl->dist[v] = g;
             pl->parent_dir[v] = (uint8_t)d;
-            e.key = (float)((double)g + estimate_at(&est, lat, nb));
-            e.node = (int32_t)v;
-            if (pl->heap_pos[v] >= 0) {
-                pl->heap[pl->heap_pos[v]] = e;
-                sift_up(pl, pl->heap_pos[v]);
-            } else {
-                pl->heap[size] = e;
-                sift_up(pl, size++);
-            }
+            push_or_lower(pl, &size, v,
+                          (float)((double)g + estimate_at(&est, lat, nb)));
         }
     }
 }

@@ -17,9 +17,9 @@ struct qrt_ends {
 
 struct qrt_search_result {
     int found;
-    long goal_node;   /* the lattice node the path leaves from */
-    double cost;      /* seed cost + lattice path + goal connection */
-    long expanded;    /* nodes taken off the heap */
+    long goal_node; /* the lattice node the path leaves from */
+    double cost;    /* seed cost + lattice path + goal connection */
+    long expanded;  /* nodes taken off the heap */
 };
 
 /* Search from the seeds to any goal on pl->mask, leaving the parent of

@@ -26,7 +26,7 @@ static inline void ref_fk(const double q_deg[3], double p[4][3])
 }
 
 static inline double ref_seg_dist(const double x[3], const double a[3],
-                           const double b[3])
+                                  const double b[3])
 {
     double ab[3], t = 0.0, len2 = 0.0, d2 = 0.0;
     int i;
@@ -45,8 +45,8 @@ static inline double ref_seg_dist(const double x[3], const double a[3],
 }
 
 /* Smallest (distance - radius) over links and points. */
-static inline double ref_clearance(const double q_deg[3], const double *pts, long n,
-                            const double radius[3])
+static inline double ref_clearance(const double q_deg[3], const double *pts,
+                                   long n, const double radius[3])
 {
     double p[4][3], best = 1e30;
     long i;

@@ -4,6 +4,7 @@
  * be truly free (searched by brute force with the reference arm), as must a
  * sample of the clustered mask's free frontier. */
 #include "../../src/core/raster.h"
+#include "box_search.h"
 #include "check.h"
 #include "qrtplan/qrtplan.h"
 #include "ref_arm.h"
@@ -11,44 +12,6 @@
 static struct qrt_planner pl;
 static struct qrt_mask single;
 static double cloud[3 * 3000];
-
-static double box_min_clearance(const double centre[3], double h, long n,
-                                const double radius[3])
-{
-    double best = 1e30;
-    int start, c, k;
-    for (start = 0; start < 12; start++) {
-        double q[3], step = h, val;
-        for (k = 0; k < 3; k++)
-            q[k] = centre[k] +
-                   (start < 8 ? ((start >> k) & 1 ? h : -h)
-                              : test_uniform(-h, h));
-        val = ref_clearance(q, cloud, n, radius);
-        while (step > 2e-3) {
-            int improved = 0;
-            for (c = 0; c < 27; c++) {
-                double t[3], v;
-                if (c == 13)
-                    continue;
-                t[0] = fmin(centre[0] + h, fmax(centre[0] - h, q[0] + (c / 9 - 1) * step));
-                t[1] = fmin(centre[1] + h, fmax(centre[1] - h, q[1] + ((c / 3) % 3 - 1) * step));
-                t[2] = fmin(centre[2] + h, fmax(centre[2] - h, q[2] + (c % 3 - 1) * step));
-                v = ref_clearance(t, cloud, n, radius);
-                if (v < val) {
-                    val = v;
-                    q[0] = t[0];
-                    q[1] = t[1];
-                    q[2] = t[2];
-                    improved = 1;
-                }
-            }
-            if (!improved)
-                step *= 0.5;
-        }
-        best = fmin(best, val);
-    }
-    return best;
-}
 
 static long make_cloud(int kind)
 {
@@ -58,7 +21,8 @@ static long make_cloud(int kind)
         double cx = test_uniform(-0.6, 0.6), cy = test_uniform(-0.6, 0.6);
         for (i = 0; i < 40; i++)
             for (j = 0; j < 40; j++) {
-                double t1 = 6.2831853 * i / 40, t2 = -1.5707963 + 3.14159265 * j / 39;
+                double t1 = 6.2831853 * i / 40,
+                       t2 = -1.5707963 + 3.14159265 * j / 39;
                 cloud[3 * n] = cx + 0.12 * cos(t1) * cos(t2);
                 cloud[3 * n + 1] = cy + 0.12 * sin(t1) * cos(t2);
                 cloud[3 * n + 2] = 0.1 + 0.12 * sin(t2);
@@ -109,9 +73,11 @@ int main(void)
             int a = qrt_mask_blocked_index(&pl.mask, idx);
             int b = qrt_mask_blocked_index(&single, idx);
             int ijk[3];
-            double centre[3];
-            CHECK(!a || b, "clustered mask blocks node %ld that points alone "
-                  "leave free", idx);
+            double centre[3], worst[3];
+            CHECK(!a || b,
+                  "clustered mask blocks node %ld that points alone "
+                  "leave free",
+                  idx);
             if (a || (!b && test_uniform(0, 1) > 0.002))
                 continue;
             /* free in the clustered mask: blocked by single points only
@@ -122,7 +88,8 @@ int main(void)
                 continue;
             qrt_lattice_coords(&pl.mask.lat, idx, ijk);
             qrt_lattice_joints(&pl.mask.lat, ijk, centre);
-            CHECK(box_min_clearance(centre, 0.5 * prm.grid_deg, n, radius) >= 0.0,
+            CHECK(box_min_clearance(cloud, n, radius, centre,
+                                    0.5 * prm.grid_deg, 12, 2e-3, worst) >= 0.0,
                   "node (%g %g %g) left free by the clusters collides",
                   centre[0], centre[1], centre[2]);
             checked++;

@@ -87,9 +87,9 @@ static void test_paper_equations(void)
         p[0] = rho * cos(phi);
         p[1] = rho * sin(phi);
         p[2] = test_uniform(-0.4, 0.6);
-        a = atan2(p[1], p[0]);                        /* Eq. 1 */
+        a = atan2(p[1], p[0]); /* Eq. 1 */
         r1 = sqrt(pow(sqrt(p[0] * p[0] + p[1] * p[1]) - l1, 2) +
-                  p[2] * p[2]);                       /* Eq. 6 */
+                  p[2] * p[2]);                                  /* Eq. 6 */
         th1 = atan2(p[2], sqrt(p[0] * p[0] + p[1] * p[1]) - l1); /* Eq. 7 */
         qrt_planner_init(&pl, &prm);
         qrt_planner_add_points(&pl, p, 1);

@@ -65,9 +65,10 @@ int main(void)
             if (qrt_motion_free_on_mask(&pl.mask, a, b)) {
                 double c = motion_clearance(a, b, pts, n, radius);
                 accepted_mask++;
-                CHECK(c >= 0.0, "mask walk accepted a colliding motion "
-                      "(%g %g %g)->(%g %g %g): %g", a[0], a[1], a[2], b[0],
-                      b[1], b[2], c);
+                CHECK(c >= 0.0,
+                      "mask walk accepted a colliding motion "
+                      "(%g %g %g)->(%g %g %g): %g",
+                      a[0], a[1], a[2], b[0], b[1], b[2], c);
             }
             if (i % 4 == 0 &&
                 qrt_motion_free_exact(&prm.arm, pl.radius_m, &pl.points,

@@ -115,8 +115,8 @@ static void test_random_scenes(void)
             continue;
         solved++;
         CHECK(plan.n_waypoints >= 2, "waypoints %d", plan.n_waypoints);
-        CHECK(qrt_arm_joint_distance(&prm.arm, plan.waypoints_deg[0],
-                                     s.value) < 1e-9,
+        CHECK(qrt_arm_joint_distance(&prm.arm, plan.waypoints_deg[0], s.value) <
+                  1e-9,
               "path does not start at the start");
         {
             double c = path_clearance(&plan, cloud, n, radius);
@@ -209,8 +209,7 @@ static void test_statuses(void)
     qrt_planner_build_mask(&pl);
     CHECK(qrt_planner_plan(&pl, &s, &g, &plan) == QRT_OK &&
               plan.status == QRT_STATUS_NO_PATH,
-          "walled in: %s (%s)", qrt_plan_status_name(plan.status),
-          plan.detail);
+          "walled in: %s (%s)", qrt_plan_status_name(plan.status), plan.detail);
 }
 
 int main(void)

@@ -23,8 +23,8 @@ static void test_exact_then_voxels(void)
     CHECK(qrt_points_add(&pts, xyz + 3 * QRT_MAX_POINTS, 5000) == QRT_OK,
           "add more");
     CHECK(pts.voxel_m > 0.0, "switched to voxels");
-    CHECK(pts.count <= QRT_MAX_POINTS && pts.dropped == 0, "%ld %ld",
-          pts.count, pts.dropped);
+    CHECK(pts.count <= QRT_MAX_POINTS && pts.dropped == 0, "%ld %ld", pts.count,
+          pts.dropped);
     /* every input point is within the inflation of some stored point */
     for (i = 0; i < n; i += 97) {
         double best = 1e30;
@@ -39,8 +39,10 @@ static void test_exact_then_voxels(void)
         }
         worst = fmax(worst, sqrt(best));
     }
-    CHECK(worst <= qrt_points_inflation_m(&pts), "point %g m from its voxel "
-          "centre, inflation %g", worst, qrt_points_inflation_m(&pts));
+    CHECK(worst <= qrt_points_inflation_m(&pts),
+          "point %g m from its voxel "
+          "centre, inflation %g",
+          worst, qrt_points_inflation_m(&pts));
     printf("voxel %.3f m, %ld entries, worst offset %.4f m\n", pts.voxel_m,
            pts.count, worst);
 }

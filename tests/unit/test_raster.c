@@ -4,70 +4,12 @@
  * blocks too little would show) the smallest clearance inside its box is
  * searched for with many starts and a shrinking local search, using the
  * independent reference arm of ref_arm.h. */
+#include "box_search.h"
 #include "check.h"
 #include "qrtplan/qrtplan.h"
 #include "ref_arm.h"
 
 static struct qrt_planner pl;
-
-struct box_search {
-    const double *pts;
-    long n;
-    double radius[3];
-};
-
-static double clamp(double x, double lo, double hi)
-{
-    return x < lo ? lo : (x > hi ? hi : x);
-}
-
-/* Smallest clearance found in the box centre +- h (degrees). */
-static double min_clearance_in_box(const struct box_search *bs,
-                                   const double centre[3], double h,
-                                   double worst[3])
-{
-    double best = 1e30;
-    int start, k, c;
-    for (start = 0; start < 16; start++) {
-        double q[3], step = h, val;
-        for (k = 0; k < 3; k++) {
-            if (start < 8) /* the corners first */
-                q[k] = centre[k] + ((start >> k) & 1 ? h : -h);
-            else
-                q[k] = centre[k] + test_uniform(-h, h);
-        }
-        val = ref_clearance(q, bs->pts, bs->n, bs->radius);
-        while (step > 1e-4) {
-            int improved = 0;
-            for (c = 0; c < 26; c++) {
-                double t[3], v;
-                int code = c < 13 ? c : c + 1;
-                t[0] = clamp(q[0] + (code / 9 - 1) * step, centre[0] - h,
-                             centre[0] + h);
-                t[1] = clamp(q[1] + ((code / 3) % 3 - 1) * step,
-                             centre[1] - h, centre[1] + h);
-                t[2] = clamp(q[2] + (code % 3 - 1) * step, centre[2] - h,
-                             centre[2] + h);
-                v = ref_clearance(t, bs->pts, bs->n, bs->radius);
-                if (v < val) {
-                    val = v;
-                    q[0] = t[0];
-                    q[1] = t[1];
-                    q[2] = t[2];
-                    improved = 1;
-                }
-            }
-            if (!improved)
-                step *= 0.5;
-        }
-        if (val < best) {
-            best = val;
-            for (k = 0; k < 3; k++)
-                worst[k] = q[k];
-        }
-    }
-    return best;
-}
 
 static int has_blocked_neighbour(const struct qrt_mask *m, const int ijk[3])
 {
@@ -92,7 +34,7 @@ static int has_blocked_neighbour(const struct qrt_mask *m, const int ijk[3])
 static void random_point(double p[3])
 {
     double kind = test_uniform(0.0, 1.0);
-    double rho = kind < 0.15 ? test_uniform(0.0, 0.15)   /* near the axis */
+    double rho = kind < 0.15 ? test_uniform(0.0, 0.15) /* near the axis */
                              : test_uniform(0.1, 1.0);
     double phi = test_uniform(-3.14159, 3.14159);
     p[0] = rho * cos(phi);
@@ -103,13 +45,11 @@ static void random_point(double p[3])
 /* Share of the free frontier nodes searched; QRT_TEST_FULL=1 takes all. */
 static double frontier_share = 0.25;
 
-static void run_case(double grid, double cspace_margin, int npts,
-                     long *checked, long *blocked_checked,
-                     long *blocked_colliding)
+static void run_case(double grid, double cspace_margin, int npts, long *checked,
+                     long *blocked_checked, long *blocked_colliding)
 {
     struct qrt_params prm;
-    struct box_search bs;
-    double pts[3 * 16];
+    double pts[3 * 16], radius[3];
     long idx, n_nodes, sampled = 0;
     int i, k;
     qrt_params_default(&prm);
@@ -123,10 +63,8 @@ static void run_case(double grid, double cspace_margin, int npts,
         random_point(pts + 3 * i);
     qrt_planner_add_points(&pl, pts, npts);
     qrt_planner_build_mask(&pl);
-    bs.pts = pts;
-    bs.n = npts;
     for (k = 0; k < 3; k++)
-        bs.radius[k] = prm.arm.link_radius_m[k] + prm.margin_m;
+        radius[k] = prm.arm.link_radius_m[k] + prm.margin_m;
     n_nodes = qrt_lattice_node_count(&pl.mask.lat);
     for (idx = 0; idx < n_nodes; idx++) {
         int ijk[3];
@@ -142,8 +80,8 @@ static void run_case(double grid, double cspace_margin, int npts,
         if (blocked && test_uniform(0.0, 1.0) > 0.02)
             continue;
         qrt_lattice_joints(&pl.mask.lat, ijk, centre);
-        c = min_clearance_in_box(&bs, centre, 0.5 * grid + cspace_margin,
-                                 worst);
+        c = box_min_clearance(pts, npts, radius, centre,
+                              0.5 * grid + cspace_margin, 16, 1e-4, worst);
         sampled++;
         if (blocked) {
             (*blocked_checked)++;
@@ -169,9 +107,8 @@ int main(void)
     if (getenv("QRT_TEST_FULL"))
         frontier_share = 1.0;
     for (trial = 0; trial < 24; trial++)
-        run_case(grids[trial % 3], trial % 4 == 3 ? 2.5 : 0.0,
-                 1 + trial % 6, &checked, &blocked_checked,
-                 &blocked_colliding);
+        run_case(grids[trial % 3], trial % 4 == 3 ? 2.5 : 0.0, 1 + trial % 6,
+                 &checked, &blocked_checked, &blocked_colliding);
     printf("free frontier nodes checked: %ld; blocked nodes sampled: %ld, "
            "of which a collision was found in the box: %.1f%%\n",
            checked, blocked_checked,

@@ -46,7 +46,8 @@ static double reference_cost(const struct qrt_mask *m, long from, long to)
         for (d = 0; d < 27; d++) {
             int da = d / 9 - 1, ds = (d / 3) % 3 - 1, de = d % 3 - 1;
             long v = wrap_index(lat, c[0] + da, c[1] + ds, c[2] + de);
-            double w = lat->grid_deg * sqrt((double)(da * da + ds * ds + de * de));
+            double w =
+                lat->grid_deg * sqrt((double)(da * da + ds * ds + de * de));
             if (d == 13 || v < 0 || qrt_mask_blocked_index(m, v))
                 continue;
             if (ref_dist[u] + w < ref_dist[v])
