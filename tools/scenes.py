@@ -45,8 +45,8 @@ def holed_rect(origin, u, v, hole_c, hole_r, spacing=0.02):
     return p[keep]
 
 
-def random_joints(rng):
-    return [float(rng.uniform(lo, hi)) for lo, hi in LIMITS]
+def random_joints(rng, limits=LIMITS):
+    return [float(rng.uniform(lo, hi)) for lo, hi in limits]
 
 
 def tip(q):
@@ -56,13 +56,13 @@ def tip(q):
     return [r * math.cos(a), r * math.sin(a), l2 * math.sin(s) + l3 * math.sin(s + e)]
 
 
-def targets(rng):
+def targets(rng, limits=LIMITS):
     """A start as joints and a goal as joints or as an end-effector point."""
-    start = {"joints_deg": random_joints(rng)}
+    start = {"joints_deg": random_joints(rng, limits)}
     if rng.uniform() < 0.5:
-        goal = {"joints_deg": random_joints(rng)}
+        goal = {"joints_deg": random_joints(rng, limits)}
     else:
-        goal = {"xyz_m": tip(random_joints(rng))}
+        goal = {"xyz_m": tip(random_joints(rng, limits))}
     return start, goal
 
 
@@ -142,14 +142,41 @@ def shelf(rng):
     return np.vstack(pts)
 
 
+def limits_within(rng, lo, hi, min_span):
+    a = rng.uniform(lo, hi - min_span)
+    return [float(a), float(rng.uniform(a + min_span, hi))]
+
+
+def varied_arm(rng):
+    """Spheres with the arm's settings varied: radii, margins, grid, C-space
+    margin and narrower joint limits (alpha then stops wrapping)."""
+    scene_extra = {
+        "arm": {"link_radius_m": rng.uniform(0.01, 0.05, 3).round(4).tolist(),
+                "limits_deg": [[-180.0, 180.0] if rng.uniform() < 0.5 else
+                               limits_within(rng, -180, 180, 90),
+                               limits_within(rng, -40, 180, 80),
+                               limits_within(rng, -180, 140, 120)]},
+        "margin_m": float(rng.uniform(0.0, 0.03)),
+        "grid_deg": float(rng.choice([5, 10, 20])),
+        "cspace_margin_deg": float(rng.choice([0.0, 1.0, 3.0])),
+    }
+    return random_spheres(rng), scene_extra
+
+
 FAMILIES = {"spheres": random_spheres, "boxes": random_boxes,
             "walls": random_walls, "box": confined_box, "tunnel": tunnel,
-            "shelf": shelf}
+            "shelf": shelf, "varied": varied_arm}
 
 
 def make_scene(family, seed):
     rng = np.random.default_rng(seed)
-    pts = FAMILIES[family](rng)
-    start, goal = targets(rng)
-    return {"version": 1, "name": f"{family}-{seed}",
-            "points": np.round(pts, 6).tolist(), "start": start, "goal": goal}
+    made = FAMILIES[family](rng)
+    pts, extra = made if isinstance(made, tuple) else (made, {})
+    scene = {"version": 1, "name": f"{family}-{seed}", **extra,
+             "points": np.round(pts, 6).tolist()}
+    scene["start"], scene["goal"] = targets(rng, scene_limits(scene))
+    return scene
+
+
+def scene_limits(scene):
+    return scene.get("arm", {}).get("limits_deg", LIMITS)
