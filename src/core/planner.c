@@ -448,6 +448,16 @@ int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
         return QRT_OK;
     }
 
+    /* replanning in open space: when the straight motion is proved free,
+     * it is the shortest path and no search is needed */
+    if (pl->params.simplify && qrt_motion_free_on_mask(&pl->mask, qs, qg)) {
+        plan->n_waypoints = 0;
+        append_waypoint(pl, plan, qs, 0);
+        append_waypoint(pl, plan, qg, 1);
+        plan->cost_deg = plan->lattice_cost_deg = route_cost(pl, plan);
+        set_status(plan, QRT_STATUS_OK, "straight motion is free");
+        return QRT_OK;
+    }
     qrt_search(pl, &seeds, &goals, pl->params.use_astar, &res);
     plan->nodes_expanded = res.expanded;
     if (!res.found) {

@@ -76,10 +76,10 @@ def test_lattice_cost_matches_networkx(qrtplan, tmp_path, grid, seed):
                 assert plan["status"] == "no_path", plan["status"]
                 continue
             assert plan["status"] == "ok", plan
-            assert plan["stats"]["lattice_cost_deg"] == pytest.approx(expect, abs=1e-3)
             if flags:
+                assert plan["stats"]["lattice_cost_deg"] == pytest.approx(expect, abs=1e-3)
                 assert plan["cost_deg"] == pytest.approx(expect, abs=1e-3)
-            else:  # shortcuts only ever shorten the path
+            else:  # shortcuts (or the straight motion) only ever shorten it
                 assert plan["cost_deg"] <= expect + 1e-6
         compared += 1
     assert compared == 4
