@@ -41,16 +41,19 @@ static double sweep_half_width(double d, double len, double reach)
     return qrt_fast_atan2(sqrt(1.0 - c * c), c) + ANG_EPS; /* acos(c) */
 }
 
+/* Bits a..b of a row (a <= b). */
 static void set_row_range(uint64_t *row, int a, int b)
 {
-    int w;
-    for (w = a >> 6; w <= (b >> 6); w++) {
-        int lo = w == (a >> 6) ? (a & 63) : 0;
-        int hi = w == (b >> 6) ? (b & 63) : 63;
-        uint64_t bits = (hi == 63 ? ~0ull : ((1ull << (hi + 1)) - 1u)) &
-                        ~((1ull << lo) - 1u);
-        row[w] |= bits;
+    int wa = a >> 6, wb = b >> 6, w;
+    uint64_t first = ~0ull << (a & 63), last = ~0ull >> (63 - (b & 63));
+    if (wa == wb) {
+        row[wa] |= first & last;
+        return;
     }
+    row[wa] |= first;
+    for (w = wa + 1; w < wb; w++)
+        row[w] = ~0ull;
+    row[wb] |= last;
 }
 
 /* Index ranges [out[i][0], out[i][1]] of the nodes of axis ax whose angle
@@ -157,6 +160,9 @@ void qrt_raster_begin(struct qrt_raster *r, struct qrt_mask *mask,
         for (s = 0; s < QRT_MAX_NS; s++)
             for (w = 0; w < QRT_ROW_WORDS; w++)
                 mask->rows[a][s][w] = 0;
+    for (w = 0; w < QRT_ROW_WORDS; w++)
+        r->full_row[w] = 0;
+    set_row_range(r->full_row, 0, lat->n[2] - 1);
 }
 
 /* Link 1 depends on alpha only: a hit blocks whole alpha slabs. */
@@ -232,25 +238,46 @@ static int plane_at(const struct qrt_raster *r, int ia, const double p[3],
     return 1;
 }
 
+/* Sigma rows link 2 can hit for this disc (whole rows: link 2 does not
+ * depend on eta). Returns the count of index ranges. */
+static int link2_rows(const struct qrt_raster *r, const struct plane *pl,
+                      int ranges[3][2])
+{
+    double w;
+    if (!pl->hit2)
+        return 0;
+    w = sweep_half_width(pl->d, r->arm->link_m[1], pl->reach2);
+    if (w < 0.0)
+        return 0;
+    return angle_ranges(&r->axis[1], qrt_fast_atan2(pl->z, pl->cu), w + r->h,
+                        ranges);
+}
+
 /* Link 2 (sigma only): rows it can hit are blocked whole. */
 static void raster_link2(const struct qrt_raster *r, int ia,
                          const struct plane *pl, unsigned char *full)
 {
     const struct qrt_lattice *lat = &r->mask->lat;
-    double w;
-    int ranges[3][2], n, i, is;
-    if (!pl->hit2)
-        return;
-    w = sweep_half_width(pl->d, r->arm->link_m[1], pl->reach2);
-    if (w < 0.0)
-        return;
-    n = angle_ranges(&r->axis[1], qrt_fast_atan2(pl->z, pl->cu), w + r->h,
-                     ranges);
+    int ranges[3][2], n = link2_rows(r, pl, ranges), i, is;
     for (i = 0; i < n; i++)
         for (is = ranges[i][0]; is <= ranges[i][1]; is++) {
             set_row_range(r->mask->rows[ia][is], 0, lat->n[2] - 1);
             full[is] = 1;
         }
+}
+
+/* Are all rows of alpha node ia in the index ranges blocked for every eta? */
+static int rows_full(const struct qrt_raster *r, int ia, int ranges[3][2],
+                     int n)
+{
+    int i, is, w;
+    for (i = 0; i < n; i++)
+        for (is = ranges[i][0]; is <= ranges[i][1]; is++)
+            for (w = 0; w < QRT_ROW_WORDS; w++)
+                if ((r->mask->rows[ia][is][w] & r->full_row[w]) !=
+                    r->full_row[w])
+                    return 0;
+    return 1;
 }
 
 /* Sigma rows whose elbow lies within link 3 (plus reach) of the disc. */
@@ -359,6 +386,16 @@ void qrt_raster_point(const struct qrt_raster *r, const double p[3])
             raster_plane(r, ia, rho, p);
 }
 
+/* Every member's plane at alpha node ia (hit2 = hit3 = 0 where none). */
+static void member_planes(const struct qrt_raster *r, int ia, double (*mp)[3],
+                          const double *mrho, int m, struct plane *mpl)
+{
+    int j;
+    for (j = 0; j < m; j++)
+        if (!plane_at(r, ia, mp[j], mrho[j], 0.0, &mpl[j]))
+            mpl[j].hit2 = mpl[j].hit3 = 0;
+}
+
 /* A cluster of nearby points shares the link-3 work. Its bounding ball
  * (centre c, radius ball) touches the arm wherever any member does, so its
  * raster contains every cell a member truly blocks. On each sigma row the
@@ -409,14 +446,17 @@ void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
         for (ia = ranges[i][0]; ia <= ranges[i][1]; ia++) {
             unsigned char full[QRT_MAX_NS] = {0};
             struct plane cpl;
-            int rows[3][2], nrows, is;
+            int rows[3][2], nrows, is, planes_ready = 0;
             if (!plane_at(r, ia, c, rho_c, ball, &cpl))
                 continue; /* no member can touch links 2 or 3 here */
-            for (j = 0; j < m; j++)
-                if (plane_at(r, ia, mp[j], mrho[j], 0.0, &mpl[j]))
+            /* link 2: members only where the ball's rows are not all full */
+            nrows = link2_rows(r, &cpl, rows);
+            if (nrows > 0 && !rows_full(r, ia, rows, nrows)) {
+                member_planes(r, ia, mp, mrho, m, mpl);
+                planes_ready = 1;
+                for (j = 0; j < m; j++)
                     raster_link2(r, ia, &mpl[j], full);
-                else
-                    mpl[j].hit3 = 0;
+            }
             nrows = link3_rows(r, &cpl, rows);
             for (k = 0; k < nrows; k++)
                 for (is = rows[k][0]; is <= rows[k][1]; is++) {
@@ -427,6 +467,10 @@ void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
                     nc = link3_row_ranges(r, is, &cpl, cr);
                     if (nc == 0 || ranges_blocked(row, cr, nc))
                         continue;
+                    if (!planes_ready) {
+                        member_planes(r, ia, mp, mrho, m, mpl);
+                        planes_ready = 1;
+                    }
                     for (j = 0; j < m; j++) {
                         int mr[3][2], nm;
                         if (!mpl[j].hit3)

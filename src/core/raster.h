@@ -23,8 +23,9 @@ struct qrt_raster {
     double lo[3];       /* joint value of node 0, radians */
     double elbow_shift; /* bound on elbow travel inside a box, metres */
     struct qrt_axis axis[3];
-    double sigma[QRT_MAX_NS];    /* sigma at each node */
-    double elbow[QRT_MAX_NS][2]; /* elbow (u, z) at each sigma node */
+    double sigma[QRT_MAX_NS];         /* sigma at each node */
+    double elbow[QRT_MAX_NS][2];      /* elbow (u, z) at each sigma node */
+    uint64_t full_row[QRT_ROW_WORDS]; /* every eta node of a row */
     double cos_h, sin_h;
     double alpha_cs[QRT_MAX_NA][2]; /* cos, sin of each alpha node */
 };
