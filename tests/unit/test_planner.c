@@ -212,10 +212,61 @@ static void test_statuses(void)
           "walled in: %s (%s)", qrt_plan_status_name(plan.status), plan.detail);
 }
 
+/* Starts 1-20 mm from an obstacle: their own lattice cell is blocked, so
+ * the join to the lattice must be proved against the points themselves
+ * (conservative advancement). The paths must still be safe. */
+static void test_starts_near_obstacles(void)
+{
+    struct qrt_params prm;
+    double radius[3] = {0.03, 0.03, 0.03};
+    int trial, tried = 0, solved = 0, exact_joins = 0;
+    long n = sphere(cloud, 0.55, 0.0, 0.1, 0.12, 30);
+    qrt_params_default(&prm);
+    qrt_planner_init(&pl, &prm);
+    qrt_planner_add_points(&pl, cloud, n);
+    qrt_planner_build_mask(&pl);
+    for (trial = 0; trial < 4000 && tried < 60; trial++) {
+        struct qrt_target s = {QRT_TARGET_JOINTS, {0, 0, 0}};
+        struct qrt_target g = {QRT_TARGET_JOINTS, {-150, 30, -20}};
+        struct qrt_plan plan;
+        double c;
+        s.value[0] = test_uniform(-40, 40);
+        s.value[1] = test_uniform(-40, 60);
+        s.value[2] = test_uniform(-90, 90);
+        c = ref_clearance(s.value, cloud, n, radius);
+        if (c <= 0.001 || c > 0.02)
+            continue;
+        tried++;
+        CHECK(qrt_planner_plan(&pl, &s, &g, &plan) == QRT_OK, "plan");
+        if (plan.status != QRT_STATUS_OK)
+            continue;
+        solved++;
+        {
+            int ijk[3], j;
+            for (j = 0; j < 3; j++)
+                ijk[j] = (int)floor((s.value[j] - pl.mask.lat.lo_deg[j]) /
+                                        pl.mask.lat.grid_deg +
+                                    0.5);
+            ijk[0] %= pl.mask.lat.n[0];
+            exact_joins += qrt_mask_blocked(&pl.mask, ijk);
+        }
+        CHECK(path_clearance(&plan, cloud, n, radius) >= 0.0,
+              "near-obstacle start (%g %g %g): path collides", s.value[0],
+              s.value[1], s.value[2]);
+    }
+    printf("starts 1-20 mm from the sphere: %d tried, %d planned, %d of them "
+           "joined from a blocked cell\n",
+           tried, solved, exact_joins);
+    CHECK(tried == 60 && solved > 10 && exact_joins > 5,
+          "near-obstacle starts: %d tried, %d solved, %d exact joins", tried,
+          solved, exact_joins);
+}
+
 int main(void)
 {
     test_seed(2024);
     test_statuses();
+    test_starts_near_obstacles();
     test_table4();
     test_random_scenes();
     return test_done("test_planner");
