@@ -6,7 +6,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-debs=(build-essential cmake ninja-build clang libclang-rt-14-dev valgrind python3-venv
+debs=(build-essential cmake ninja-build pkg-config clang libclang-rt-14-dev valgrind python3-venv
       python3-dev cppcheck clang-format)
 missing=()
 for p in "${debs[@]}"; do
