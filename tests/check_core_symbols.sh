@@ -4,10 +4,11 @@
 # global or static data (all state is the caller's struct qrt_planner).
 set -euo pipefail
 lib=$1
+nm=${2:-nm}
 allowed='^(acos|asin|atan2|cos|sin|sincos|floor|ceil|fmod|hypot|sqrt|memset|memcpy|qrt_[a-z0-9_]+)$'
-undefined=$(nm -u "$lib" | awk 'NF == 2 {print $2}' | sort -u)
+undefined=$("$nm" -u "$lib" | awk 'NF == 2 {print $2}' | sort -u)
 bad=$(echo "$undefined" | grep -Ev "$allowed" || true)
-data=$(nm "$lib" | awk '$2 ~ /^[bBdDcC]$/ {print $3}' | sort -u)
+data=$("$nm" "$lib" | awk '$2 ~ /^[bBdDcC]$/ {print $3}' | sort -u)
 echo "core calls: $(echo "$undefined" | grep -v '^qrt_' | tr '\n' ' ')"
 if [ -n "$bad" ]; then
     echo "FAIL: the core calls outside libm: $bad"

@@ -1,5 +1,5 @@
 /* qrtplan: the planning core on scene files. */
-#define _POSIX_C_SOURCE 200809L
+#define _XOPEN_SOURCE 700
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -212,10 +212,30 @@ static int write_pcd(const char *path, const double *xyz, long n, int ascii)
     return fclose(f) == 0 ? 0 : -1;
 }
 
-static const char *base_name(const char *path)
+/* How the scene at scene_path should name the PCD file at pcd_path: the
+ * bare file name when both sit in the same directory, else the PCD's
+ * absolute path (points_file is resolved against the scene's directory). */
+static int points_file_name(const char *pcd_path, const char *scene_path,
+                            char *out, size_t len)
 {
-    const char *slash = strrchr(path, '/');
-    return slash ? slash + 1 : path;
+    char pcd_dir[4096], scene_dir[4096], real[4096];
+    const char *slash = strrchr(pcd_path, '/');
+    const char *name = slash ? slash + 1 : pcd_path;
+    if (!realpath(pcd_path, real))
+        return -1;
+    snprintf(pcd_dir, sizeof pcd_dir, "%.*s", (int)(strrchr(real, '/') - real),
+             real);
+    if (scene_path && strrchr(scene_path, '/')) {
+        char tmp[4096];
+        snprintf(tmp, sizeof tmp, "%.*s",
+                 (int)(strrchr(scene_path, '/') - scene_path), scene_path);
+        if (!realpath(tmp[0] ? tmp : "/", scene_dir))
+            return -1;
+    } else if (!realpath(".", scene_dir)) {
+        return -1;
+    }
+    snprintf(out, len, "%s", strcmp(pcd_dir, scene_dir) == 0 ? name : real);
+    return 0;
 }
 
 static int cmd_gen(int argc, char **argv)
@@ -282,7 +302,12 @@ static int cmd_gen(int argc, char **argv)
             "points (paper Eq. 13)\",\n",
             L.spheres, n / L.spheres);
     if (pcd_path) {
-        fprintf(out, "  \"points_file\": \"%s\",\n", base_name(pcd_path));
+        char name[4096];
+        if (points_file_name(pcd_path, out_path, name, sizeof name)) {
+            free(xyz);
+            return fail(pcd_path, "cannot resolve its path");
+        }
+        fprintf(out, "  \"points_file\": \"%s\",\n", name);
     } else {
         fprintf(out, "  \"points\": [");
         for (i = 0; i < n; i++)

@@ -148,6 +148,11 @@ static int parse_header(const char *buf, size_t len, size_t *pos,
             }
             return 0;
         } else {
+            size_t i;
+            for (i = 0; line[i]; i++) /* the message stays one printable line */
+                if ((unsigned char)line[i] < 0x20 ||
+                    (unsigned char)line[i] > 0x7e)
+                    line[i] = '?';
             snprintf(err, err_len, "unknown header line '%.40s'", line);
             return -1;
         }
