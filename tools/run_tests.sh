@@ -2,7 +2,10 @@
 # Every test of the project, as `make test` and CI run them:
 #   1. the release build's CTest suite (C unit tests + Python tests),
 #   2. the same suite built with AddressSanitizer and UBSan,
-#   3. the libFuzzer target on the scene/PCD readers for a bounded time.
+#   3. the core's C tests cross-built for armhf and aarch64, run under
+#      qemu-user, with the paper's scenes planned exactly as on the host,
+#   4. the core cross-built for a Cortex-M7,
+#   5. the libFuzzer target on the scene/PCD readers for a bounded time.
 # Ends with one "N passed, M failed" line; exits non-zero on any failure.
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -41,6 +44,26 @@ run_suite "release build" build -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQRT_PYTHON_T
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
     run_suite "ASan + UBSan build" build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DQRT_SANITIZE=ON -DQRT_PYTHON_TESTS=ON
+
+# The core and its C tests on ARM Linux, under qemu-user, and the plans of
+# the paper's scenes compared with the host build's.
+for target in arm-linux-gnueabihf aarch64-linux-gnu; do
+    run_suite "$target (qemu-user)" "build-$target" \
+        -DCMAKE_TOOLCHAIN_FILE=cmake/toolchains/$target.cmake \
+        -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQRT_PYTHON_TESTS=OFF \
+        -DQRT_HOST_QRTPLAN="$PWD/build/bin/qrtplan"
+done
+
+echo "== Cortex-M7 (arm-none-eabi): the core builds with -Werror"
+if cmake -S . -B build-cortex-m7 $gen -DQRT_CORE_ONLY=ON \
+    -DCMAKE_TOOLCHAIN_FILE=cmake/toolchains/cortex-m7.cmake >/dev/null &&
+    cmake --build build-cortex-m7 >build-cortex-m7/build.log 2>&1; then
+    passed=$((passed + 1))
+    echo "cortex-m7 core: built"
+else
+    tail -30 build-cortex-m7/build.log
+    failed=$((failed + 1))
+fi
 
 echo "== libFuzzer: scene and PCD readers, ${fuzz_seconds} s"
 if tools/fuzz.sh "$fuzz_seconds"; then

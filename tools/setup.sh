@@ -7,7 +7,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 debs=(build-essential cmake ninja-build pkg-config clang libclang-rt-14-dev valgrind python3-venv
-      python3-dev cppcheck clang-format)
+      python3-dev cppcheck clang-format
+      # cross builds of the core and their emulated tests
+      gcc-arm-linux-gnueabihf libc6-dev-armhf-cross gcc-aarch64-linux-gnu
+      libc6-dev-arm64-cross qemu-user-static gcc-arm-none-eabi
+      libnewlib-arm-none-eabi)
 missing=()
 for p in "${debs[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" ||

@@ -48,7 +48,7 @@ int main(void)
     long skipped_total = 0, checked = 0;
     int trial;
     test_seed(8080);
-    for (trial = 0; trial < 4; trial++) {
+    for (trial = 0; trial < test_count(4); trial++) {
         struct qrt_params prm;
         struct qrt_raster r;
         double radius[3];
@@ -98,6 +98,6 @@ int main(void)
     }
     printf("nodes left free only by clustering: %ld; nodes brute-forced: %ld\n",
            skipped_total, checked);
-    CHECK(checked >= 40, "too few nodes checked");
+    CHECK(checked >= test_count(4) * 10, "too few nodes checked");
     return test_done("test_cluster");
 }

@@ -7,7 +7,7 @@ int main(void)
     double worst = 0.0;
     int i;
     test_seed(5);
-    for (i = 0; i < 2000000; i++) {
+    for (i = 0; i < test_count(2000000); i++) {
         double y = test_uniform(-1, 1), x = test_uniform(-1, 1);
         double e = fabs(qrt_fast_atan2(y, x) - atan2(y, x));
         if (e > worst)

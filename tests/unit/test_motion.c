@@ -40,7 +40,7 @@ int main(void)
     double pts[3 * 12], radius[3];
     int trial, accepted_mask = 0, accepted_exact = 0, i, k;
     test_seed(31337);
-    for (trial = 0; trial < 40; trial++) {
+    for (trial = 0; trial < test_count(40); trial++) {
         int n = 2 + trial % 10;
         qrt_params_default(&prm);
         qrt_planner_init(&pl, &prm);
@@ -82,7 +82,8 @@ int main(void)
     }
     printf("motions accepted: mask %d, exact %d\n", accepted_mask,
            accepted_exact);
-    CHECK(accepted_mask > 1000 && accepted_exact > 200, "too few accepted");
+    CHECK(accepted_mask > test_count(1000) && accepted_exact > test_count(200),
+          "too few accepted");
     {
         /* the seam: 175 -> -175 is a 10 degree move, not 350 */
         double a[3] = {175, 0, 0}, b[3] = {-175, 0, 0}, d[3];

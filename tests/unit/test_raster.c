@@ -104,6 +104,7 @@ int main(void)
     long checked = 0, blocked_checked = 0, blocked_colliding = 0;
     int trial;
     test_seed(12345);
+    frontier_share *= (double)test_count(1000) / 1000.0;
     if (getenv("QRT_TEST_FULL"))
         frontier_share = 1.0;
     for (trial = 0; trial < 24; trial++)
@@ -113,7 +114,7 @@ int main(void)
            "of which a collision was found in the box: %.1f%%\n",
            checked, blocked_checked,
            100.0 * blocked_colliding / (blocked_checked ? blocked_checked : 1));
-    CHECK(checked > 1000, "too few nodes checked: %ld", checked);
+    CHECK(checked > test_count(1000), "too few nodes checked: %ld", checked);
     /* tightness: a raster that blocks far too much fails here */
     CHECK(blocked_colliding > 0.6 * blocked_checked,
           "only %ld of %ld sampled blocked nodes really collide",
