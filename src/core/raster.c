@@ -374,16 +374,23 @@ static double max_plane_radius(const struct qrt_raster *r)
     return r->radius_m[1] > r->radius_m[2] ? r->radius_m[1] : r->radius_m[2];
 }
 
-void qrt_raster_point(const struct qrt_raster *r, const double p[3])
+/* Links 2 and 3 of one point, over every alpha node its window holds. */
+static void raster_planes(const struct qrt_raster *r, const double p[3],
+                          double rho, double phi)
 {
-    double rho = sqrt(p[0] * p[0] + p[1] * p[1]);
-    double phi = atan2(p[1], p[0]);
     int ranges[6][2], n, i, ia;
-    raster_link1(r, rho, phi, p[2]);
     n = alpha_window(r, rho, phi, max_plane_radius(r), ranges);
     for (i = 0; i < n; i++)
         for (ia = ranges[i][0]; ia <= ranges[i][1]; ia++)
             raster_plane(r, ia, rho, p);
+}
+
+void qrt_raster_point(const struct qrt_raster *r, const double p[3])
+{
+    double rho = sqrt(p[0] * p[0] + p[1] * p[1]);
+    double phi = atan2(p[1], p[0]);
+    raster_link1(r, rho, phi, p[2]);
+    raster_planes(r, p, rho, phi);
 }
 
 /* Every member's plane at alpha node ia (hit2 = hit3 = 0 where none). */
@@ -422,11 +429,7 @@ void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
         raster_link1(r, mrho[j], atan2(mp[j][1], mp[j][0]), mp[j][2]);
     }
     if (m == 1) {
-        n = alpha_window(r, mrho[0], atan2(mp[0][1], mp[0][0]),
-                         max_plane_radius(r), ranges);
-        for (i = 0; i < n; i++)
-            for (ia = ranges[i][0]; ia <= ranges[i][1]; ia++)
-                raster_plane(r, ia, mrho[0], mp[0]);
+        raster_planes(r, mp[0], mrho[0], atan2(mp[0][1], mp[0][0]));
         return;
     }
     for (k = 0; k < 3; k++)
