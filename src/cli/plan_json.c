@@ -1,8 +1,31 @@
 #include "plan_json.h"
 
+#include <stdlib.h>
+
+/* The shortest decimal that reads back as exactly x: a waypoint on a joint
+ * limit must not be printed a hair outside it. */
+static void write_number(FILE *out, double x)
+{
+    char buf[40];
+    int digits;
+    for (digits = 10; digits < 17; digits++) {
+        snprintf(buf, sizeof buf, "%.*g", digits, x);
+        if (strtod(buf, NULL) == x)
+            break;
+    }
+    if (digits == 17)
+        snprintf(buf, sizeof buf, "%.17g", x);
+    fputs(buf, out);
+}
+
 static void write_joints(FILE *out, const double q[3])
 {
-    fprintf(out, "[%.10g, %.10g, %.10g]", q[0], q[1], q[2]);
+    int i;
+    for (i = 0; i < 3; i++) {
+        fputs(i ? ", " : "[", out);
+        write_number(out, q[i]);
+    }
+    fputc(']', out);
 }
 
 void plan_write_json(FILE *out, const struct qrt_plan *plan,
@@ -58,13 +81,15 @@ void mask_write_json(FILE *out, const struct qrt_mask *mask)
 {
     const struct qrt_lattice *lat = &mask->lat;
     long n = qrt_lattice_node_count(lat), i, written = 0;
+    fprintf(out, "{\"version\": 1, \"grid_deg\": ");
+    write_number(out, lat->grid_deg);
+    fprintf(out, ", \"n\": [%d, %d, %d], \"lo_deg\": ", lat->n[0], lat->n[1],
+            lat->n[2]);
+    write_joints(out, lat->lo_deg);
     fprintf(out,
-            "{\"version\": 1, \"grid_deg\": %g, \"n\": [%d, %d, %d], "
-            "\"lo_deg\": [%g, %g, %g], \"alpha_wraps\": %s, "
-            "\"cells_blocked\": %ld,\n \"blocked\": [",
-            lat->grid_deg, lat->n[0], lat->n[1], lat->n[2], lat->lo_deg[0],
-            lat->lo_deg[1], lat->lo_deg[2], lat->alpha_wraps ? "true" : "false",
-            qrt_mask_count_blocked(mask));
+            ", \"alpha_wraps\": %s, \"cells_blocked\": %ld,\n "
+            "\"blocked\": [",
+            lat->alpha_wraps ? "true" : "false", qrt_mask_count_blocked(mask));
     for (i = 0; i < n; i++)
         if (qrt_mask_blocked_index(mask, i))
             fprintf(out, "%s%ld",

@@ -79,3 +79,10 @@ def test_random_scenes_are_planned_safely(qrtplan, tmp_path):
     assert solved > 0.5 * len(results), f"only {solved} of {len(results)} solved"
     for family, counts in by_family.items():
         assert counts["ok"] > 0, f"no {family} scene solved"
+
+
+def test_waypoints_on_a_joint_limit_are_printed_inside_it(qrtplan):
+    # found with QRT_SEED=7: lattice nodes sit exactly on a non-round sigma
+    # limit, and waypoints printed to 10 digits landed 2e-9 degrees outside
+    family, seed, status, msg = run_one(("varied", 6054))
+    assert status == "ok", (status, msg)
