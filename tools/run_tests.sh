@@ -65,6 +65,13 @@ else
     failed=$((failed + 1))
 fi
 
+echo "== memory budget: the README's table against the built objects"
+if tools/memory_budget.sh --check README.md; then
+    passed=$((passed + 1))
+else
+    failed=$((failed + 1))
+fi
+
 echo "== libFuzzer: scene and PCD readers, ${fuzz_seconds} s"
 if tools/fuzz.sh "$fuzz_seconds"; then
     passed=$((passed + 1))

@@ -28,9 +28,9 @@ static void cube_of(const float p[3], double inv_cell, long key[3])
 
 static long slot_of(const long key[3], long size)
 {
-    uint64_t h = (uint64_t)key[0] * 0x9E3779B97F4A7C15ull;
-    h ^= (uint64_t)key[1] * 0xC2B2AE3D27D4EB4Full + (h >> 31);
-    h ^= (uint64_t)key[2] * 0x165667B19E3779F9ull + (h >> 29);
+    uint64_t h = (uint64_t)key[0] * 0x9E3779B97F4A7C15ULL;
+    h ^= (uint64_t)key[1] * 0xC2B2AE3D27D4EB4FULL + (h >> 31);
+    h ^= (uint64_t)key[2] * 0x165667B19E3779F9ULL + (h >> 29);
     h ^= h >> 32;
     return (long)(h & (uint64_t)(size - 1));
 }

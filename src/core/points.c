@@ -12,9 +12,9 @@ static long voxel_coord(double x, double voxel_m)
 
 static uint32_t voxel_hash(long ix, long iy, long iz)
 {
-    uint64_t h = (uint64_t)ix * 0x9E3779B97F4A7C15ull;
-    h ^= (uint64_t)iy * 0xC2B2AE3D27D4EB4Full + (h >> 29);
-    h ^= (uint64_t)iz * 0x165667B19E3779F9ull + (h >> 32);
+    uint64_t h = (uint64_t)ix * 0x9E3779B97F4A7C15ULL;
+    h ^= (uint64_t)iy * 0xC2B2AE3D27D4EB4FULL + (h >> 29);
+    h ^= (uint64_t)iz * 0x165667B19E3779F9ULL + (h >> 32);
     h ^= h >> 33;
     return (uint32_t)(h % (uint64_t)QRT_POINT_HASH_SLOTS);
 }

@@ -45,14 +45,14 @@ static double sweep_half_width(double d, double len, double reach)
 static void set_row_range(uint64_t *row, int a, int b)
 {
     int wa = a >> 6, wb = b >> 6, w;
-    uint64_t first = ~0ull << (a & 63), last = ~0ull >> (63 - (b & 63));
+    uint64_t first = ~0ULL << (a & 63), last = ~0ULL >> (63 - (b & 63));
     if (wa == wb) {
         row[wa] |= first & last;
         return;
     }
     row[wa] |= first;
     for (w = wa + 1; w < wb; w++)
-        row[w] = ~0ull;
+        row[w] = ~0ULL;
     row[wb] |= last;
 }
 
@@ -419,11 +419,24 @@ void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
     struct plane mpl[QRT_CLUSTER_MAX];
     int ranges[6][2], n, i, j, k, ia;
 
+    if (m > QRT_CLUSTER_MAX) {
+        /* the clusterer never emits more, but every point must still count */
+        for (j = 0; j < m; j++) {
+            for (k = 0; k < 3; k++)
+                c[k] = pts[members[j]][k];
+            qrt_raster_point(r, c);
+        }
+        return;
+    }
+    if (m < 1)
+        return;
+    for (k = 0; k < 3; k++)
+        lo[k] = hi[k] = pts[members[0]][k];
     for (j = 0; j < m; j++) {
         for (k = 0; k < 3; k++) {
             mp[j][k] = pts[members[j]][k];
-            lo[k] = j == 0 || mp[j][k] < lo[k] ? mp[j][k] : lo[k];
-            hi[k] = j == 0 || mp[j][k] > hi[k] ? mp[j][k] : hi[k];
+            lo[k] = mp[j][k] < lo[k] ? mp[j][k] : lo[k];
+            hi[k] = mp[j][k] > hi[k] ? mp[j][k] : hi[k];
         }
         mrho[j] = sqrt(mp[j][0] * mp[j][0] + mp[j][1] * mp[j][1]);
         raster_link1(r, mrho[j], atan2(mp[j][1], mp[j][0]), mp[j][2]);

@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# tools/stack_report.py must fail on what it is there to catch: recursion,
+# a variable-length array and an unlisted indirect call (tests/stack/recursive.c),
+# each reported by name.
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+cc=${1:-gcc}
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+(cd "$tmp" && "$cc" -std=c99 -O1 -fcallgraph-info=su -c "$here/recursive.c")
+if out=$(python3 "$here/../../tools/stack_report.py" "$tmp"); then
+    echo "$out"
+    echo "FAIL: stack_report accepted recursion, a VLA and an indirect call"
+    exit 1
+fi
+for what in "recursion through qrt_fact" "qrt_vla: unbounded dynamic" \
+    "qrt_indirect: indirect call not listed"; do
+    grep -q "$what" <<<"$out" || { echo "$out"; echo "FAIL: no '$what'"; exit 1; }
+done
+echo "ok: stack_report refuses recursion, VLAs and unlisted indirect calls"
