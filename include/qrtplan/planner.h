@@ -79,8 +79,13 @@ struct qrt_planner {
     double radius_m[3]; /* per-link collision radius the mask was built for */
     long cells_blocked;
     int mask_stale; /* points changed since the mask was built */
-    /* search scratch, one entry per lattice node */
-    float dist[QRT_MAX_NODES];
+    /* search scratch, one entry per lattice node; while a mask is built,
+     * heap_pos and cluster_scratch are the clustering scratch of parts 0
+     * and 1 */
+    union {
+        float dist[QRT_MAX_NODES];
+        int32_t cluster_scratch[QRT_MAX_NODES];
+    } search;
     struct qrt_heap_entry heap[QRT_MAX_NODES]; /* later holds the path */
     int32_t heap_pos[QRT_MAX_NODES];           /* -1 unseen, -2 closed */
     uint8_t parent_dir[QRT_MAX_NODES];
@@ -98,6 +103,18 @@ int qrt_planner_add_points(struct qrt_planner *pl, const double *xyz, long n);
 
 /* Convert the points into the C-space mask (paper blocks b-f). */
 int qrt_planner_build_mask(struct qrt_planner *pl);
+
+/* The same conversion split for several cores: call _begin, then
+ * _part(pl, k, nparts) for every k in 0..nparts-1 (nparts <=
+ * QRT_MAX_MASK_PARTS), at the same time on different threads if you like
+ * (each part writes only its own alpha slices of the mask and its own
+ * scratch), then _end once they have all returned. The mask is bit for bit
+ * the one qrt_planner_build_mask makes. _part returns QRT_E_INVALID for a
+ * bad part or count. */
+#define QRT_MAX_MASK_PARTS 2
+int qrt_planner_build_mask_begin(struct qrt_planner *pl);
+int qrt_planner_build_mask_part(struct qrt_planner *pl, int part, int nparts);
+int qrt_planner_build_mask_end(struct qrt_planner *pl);
 
 /* Plan from start to goal on the built mask (paper blocks g-h). Returns
  * QRT_OK with the outcome in plan->status, or QRT_E_LIMITS when joints are

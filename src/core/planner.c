@@ -94,24 +94,39 @@ static void raster_cluster(void *ctx, const int32_t *members, int m)
     qrt_raster_cluster(c->raster, c->pts, members, m);
 }
 
-int qrt_planner_build_mask(struct qrt_planner *pl)
+int qrt_planner_build_mask_begin(struct qrt_planner *pl)
 {
-    struct qrt_raster r;
     double inflation = qrt_points_inflation_m(&pl->points);
-    long i;
-    int k;
+    int k, ia, is, w;
     for (k = 0; k < 3; k++)
         pl->radius_m[k] =
             pl->params.arm.link_radius_m[k] + pl->params.margin_m + inflation;
-    qrt_raster_begin(&r, &pl->mask, &pl->params.arm, pl->radius_m,
-                     pl->params.cspace_margin_deg);
-    /* the search's heap_pos is idle until the next search: lend it */
+    for (ia = 0; ia < QRT_MAX_NA; ia++)
+        for (is = 0; is < QRT_MAX_NS; is++)
+            for (w = 0; w < QRT_ROW_WORDS; w++)
+                pl->mask.rows[ia][is][w] = 0;
+    pl->mask_stale = 1; /* until the parts are done and _end is called */
+    return QRT_OK;
+}
+
+int qrt_planner_build_mask_part(struct qrt_planner *pl, int part, int nparts)
+{
+    struct qrt_raster r;
+    int32_t *scratch;
+    long i;
+    if (nparts < 1 || nparts > QRT_MAX_MASK_PARTS || part < 0 || part >= nparts)
+        return QRT_E_INVALID;
+    qrt_raster_setup(&r, &pl->mask, &pl->params.arm, pl->radius_m,
+                     pl->params.cspace_margin_deg, part, nparts);
+    /* the search's node arrays are idle until the next search: each part
+     * lends its own for the clustering */
+    scratch = part == 0 ? pl->heap_pos : pl->search.cluster_scratch;
     if (qrt_cluster_scratch_len(pl->points.count) <= QRT_MAX_NODES) {
         struct cluster_ctx ctx;
         ctx.raster = &r;
         ctx.pts = (const float(*)[3])pl->points.xyz;
         qrt_cluster_points(ctx.pts, pl->points.count, CLUSTER_CELL_M,
-                           QRT_CLUSTER_MAX, pl->heap_pos, raster_cluster, &ctx);
+                           QRT_CLUSTER_MAX, scratch, raster_cluster, &ctx);
     } else {
         for (i = 0; i < pl->points.count; i++) {
             double p[3];
@@ -121,9 +136,21 @@ int qrt_planner_build_mask(struct qrt_planner *pl)
             qrt_raster_point(&r, p);
         }
     }
+    return QRT_OK;
+}
+
+int qrt_planner_build_mask_end(struct qrt_planner *pl)
+{
     pl->cells_blocked = qrt_mask_count_blocked(&pl->mask);
     pl->mask_stale = 0;
     return QRT_OK;
+}
+
+int qrt_planner_build_mask(struct qrt_planner *pl)
+{
+    qrt_planner_build_mask_begin(pl);
+    qrt_planner_build_mask_part(pl, 0, 1);
+    return qrt_planner_build_mask_end(pl);
 }
 
 /* Collision radii for checks against the raw points: the C-space margin

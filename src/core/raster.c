@@ -114,20 +114,30 @@ static int angle_ranges(const struct qrt_axis *ax, double centre, double half,
     return count;
 }
 
+/* Is alpha node ia this raster's to write? */
+static int owns(const struct qrt_raster *r, int ia)
+{
+    return r->nparts <= 1 || ia % r->nparts == r->part;
+}
+
 static void block_alpha(const struct qrt_raster *r, int ia)
 {
     const struct qrt_lattice *lat = &r->mask->lat;
     int is;
+    if (!owns(r, ia))
+        return;
     for (is = 0; is < lat->n[1]; is++)
         set_row_range(r->mask->rows[ia][is], 0, lat->n[2] - 1);
 }
 
-void qrt_raster_begin(struct qrt_raster *r, struct qrt_mask *mask,
+void qrt_raster_setup(struct qrt_raster *r, struct qrt_mask *mask,
                       const struct qrt_arm *arm, const double radius_m[3],
-                      double cspace_margin_deg)
+                      double cspace_margin_deg, int part, int nparts)
 {
     const struct qrt_lattice *lat = &mask->lat;
     int a, s, w, j;
+    r->part = part;
+    r->nparts = nparts;
     r->arm = arm;
     r->mask = mask;
     r->g = lat->grid_deg * QRT_DEG;
@@ -156,13 +166,21 @@ void qrt_raster_begin(struct qrt_raster *r, struct qrt_mask *mask,
         r->elbow[s][0] = arm->link_m[1] * cos(r->sigma[s]);
         r->elbow[s][1] = arm->link_m[1] * sin(r->sigma[s]);
     }
+    for (w = 0; w < QRT_ROW_WORDS; w++)
+        r->full_row[w] = 0;
+    set_row_range(r->full_row, 0, lat->n[2] - 1);
+}
+
+void qrt_raster_begin(struct qrt_raster *r, struct qrt_mask *mask,
+                      const struct qrt_arm *arm, const double radius_m[3],
+                      double cspace_margin_deg)
+{
+    int a, s, w;
     for (a = 0; a < QRT_MAX_NA; a++)
         for (s = 0; s < QRT_MAX_NS; s++)
             for (w = 0; w < QRT_ROW_WORDS; w++)
                 mask->rows[a][s][w] = 0;
-    for (w = 0; w < QRT_ROW_WORDS; w++)
-        r->full_row[w] = 0;
-    set_row_range(r->full_row, 0, lat->n[2] - 1);
+    qrt_raster_setup(r, mask, arm, radius_m, cspace_margin_deg, 0, 1);
 }
 
 /* Link 1 depends on alpha only: a hit blocks whole alpha slabs. */
@@ -382,7 +400,8 @@ static void raster_planes(const struct qrt_raster *r, const double p[3],
     n = alpha_window(r, rho, phi, max_plane_radius(r), ranges);
     for (i = 0; i < n; i++)
         for (ia = ranges[i][0]; ia <= ranges[i][1]; ia++)
-            raster_plane(r, ia, rho, p);
+            if (owns(r, ia))
+                raster_plane(r, ia, rho, p);
 }
 
 void qrt_raster_point(const struct qrt_raster *r, const double p[3])
@@ -463,7 +482,7 @@ void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
             unsigned char full[QRT_MAX_NS] = {0};
             struct plane cpl;
             int rows[3][2], nrows, is, planes_ready = 0;
-            if (!plane_at(r, ia, c, rho_c, ball, &cpl))
+            if (!owns(r, ia) || !plane_at(r, ia, c, rho_c, ball, &cpl))
                 continue; /* no member can touch links 2 or 3 here */
             /* link 2: members only where the ball's rows are not all full */
             nrows = link2_rows(r, &cpl, rows);

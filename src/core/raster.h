@@ -28,14 +28,26 @@ struct qrt_raster {
     uint64_t full_row[QRT_ROW_WORDS]; /* every eta node of a row */
     double cos_h, sin_h;
     double alpha_cs[QRT_MAX_NA][2]; /* cos, sin of each alpha node */
+    /* this raster writes only alpha nodes ia with ia % nparts == part, so
+     * that parts can run at once on different cores */
+    int part, nparts;
 };
 
 /* Prepare to raster: clears the mask. radius_m: per-link collision radius
  * (link radius + margin + point inflation); cspace_margin_deg widens every
- * cell box (Eq. 12). */
+ * cell box (Eq. 12). The raster covers every alpha node. */
 void qrt_raster_begin(struct qrt_raster *r, struct qrt_mask *mask,
                       const struct qrt_arm *arm, const double radius_m[3],
                       double cspace_margin_deg);
+
+/* The same without clearing the mask, for part `part` of `nparts`: the
+ * raster then writes only the alpha nodes ia with ia % nparts == part.
+ * Every alpha node's rows evolve exactly as in a whole raster (each row is
+ * written only by operations on its own alpha node, in the same order), so
+ * the parts together give the same mask bit for bit. */
+void qrt_raster_setup(struct qrt_raster *r, struct qrt_mask *mask,
+                      const struct qrt_arm *arm, const double radius_m[3],
+                      double cspace_margin_deg, int part, int nparts);
 
 /* Mark every node whose cell box holds a configuration that collides with
  * point p (metres). */

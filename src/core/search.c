@@ -208,9 +208,9 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
         long node = seeds->node[i];
         int ijk[3];
         qrt_lattice_coords(lat, node, ijk);
-        if (pl->heap_pos[node] >= 0 && pl->dist[node] <= seeds->cost[i])
+        if (pl->heap_pos[node] >= 0 && pl->search.dist[node] <= seeds->cost[i])
             continue;
-        pl->dist[node] = (float)seeds->cost[i];
+        pl->search.dist[node] = (float)seeds->cost[i];
         pl->parent_dir[node] = QRT_NO_PARENT;
         push_or_lower(pl, &size, node,
                       (float)(seeds->cost[i] + estimate_at(&est, lat, ijk)));
@@ -230,8 +230,9 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
         }
         res->expanded++;
         slot = goal_slot(goals, u);
-        if (slot >= 0 && (double)pl->dist[u] + goals->cost[slot] < best) {
-            best = (double)pl->dist[u] + goals->cost[slot];
+        if (slot >= 0 &&
+            (double)pl->search.dist[u] + goals->cost[slot] < best) {
+            best = (double)pl->search.dist[u] + goals->cost[slot];
             res->found = 1;
             res->goal_node = u;
             res->cost = best;
@@ -244,10 +245,10 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
             if (v < 0 || pl->heap_pos[v] == -2 ||
                 qrt_mask_blocked(&pl->mask, nb))
                 continue;
-            g = pl->dist[u] + dir_cost[d];
-            if (pl->heap_pos[v] >= 0 && pl->dist[v] <= g)
+            g = pl->search.dist[u] + dir_cost[d];
+            if (pl->heap_pos[v] >= 0 && pl->search.dist[v] <= g)
                 continue;
-            pl->dist[v] = g;
+            pl->search.dist[v] = g;
             pl->parent_dir[v] = (uint8_t)d;
             push_or_lower(pl, &size, v,
                           (float)((double)g + estimate_at(&est, lat, nb)));
