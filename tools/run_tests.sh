@@ -79,5 +79,12 @@ else
     failed=$((failed + 1))
 fi
 
+echo "== libFuzzer: CANopen decoders and the simulated drive, ${fuzz_seconds} s"
+if tools/fuzz_can.sh "$fuzz_seconds"; then
+    passed=$((passed + 1))
+else
+    failed=$((failed + 1))
+fi
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

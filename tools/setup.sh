@@ -11,7 +11,10 @@ debs=(build-essential cmake ninja-build pkg-config clang libclang-rt-14-dev valg
       # cross builds of the core and their emulated tests
       gcc-arm-linux-gnueabihf libc6-dev-armhf-cross gcc-aarch64-linux-gnu
       libc6-dev-arm64-cross qemu-user-static gcc-arm-none-eabi
-      libnewlib-arm-none-eabi)
+      libnewlib-arm-none-eabi qemu-system-arm
+      # the daemon (LCM, Eigen), the OMPL comparison, CAN tools and the VM
+      g++ liblcm-dev liblcm-bin libeigen3-dev libompl-dev can-utils
+      qemu-system-x86 busybox-static)
 missing=()
 for p in "${debs[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" ||

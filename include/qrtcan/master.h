@@ -1,0 +1,199 @@
+/* The CiA 402 master that drives the arm's three joints: bring-up, path
+ * execution with the profile-position set-point handshake, quick stop, and
+ * supervision (heartbeats, SDO answers, drive faults, the bus).
+ *
+ * Portable C99 like the rest of qrtcan: no OS calls, no malloc, no clock.
+ * The caller owns a struct qrtcan_master, hands it every received frame
+ * (qrtcan_master_on_frame) and calls qrtcan_master_tick often (every
+ * millisecond or two), both with its own monotonic time in microseconds,
+ * and sends whatever qrtcan_master_take_frames gives back. The daemon does
+ * that over SocketCAN; the tests do it against the simulated drives.
+ *
+ * Motion between waypoints is a straight line in joint space, as the
+ * planner's guarantee assumes (design.md section 4): for each segment the
+ * master gives every drive a trapezoidal profile scaled by that joint's
+ * share of the move (profile velocity, acceleration and deceleration by
+ * SDO), so all joints start and finish together and the arm stays on the
+ * segment up to the drives' following error. Alpha moves the short way
+ * round; its drive position is kept continuous (no jump at +-180 degrees).
+ */
+#ifndef QRTCAN_MASTER_H
+#define QRTCAN_MASTER_H
+
+#include <stdint.h>
+
+#include "qrtcan/cia402.h"
+#include "qrtcan/frame.h"
+#include "qrtcan/scale.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define QRTCAN_JOINTS 3
+#define QRTCAN_MASTER_MAX_WAYPOINTS 256
+#define QRTCAN_MASTER_OUTBOX 64
+
+struct qrtcan_master_config {
+    unsigned node[QRTCAN_JOINTS]; /* drive node ids (default 1, 2, 3) */
+    unsigned master_node;         /* our heartbeat's node id (default 127) */
+    struct qrtcan_scale scale[QRTCAN_JOINTS];
+    double max_speed_deg_s[QRTCAN_JOINTS];  /* per joint (default 30) */
+    double max_accel_deg_s2[QRTCAN_JOINTS]; /* per joint (default 60) */
+    uint32_t sync_period_us;       /* SYNC + RPDO cycle (default 10 ms) */
+    uint32_t master_heartbeat_us;  /* our heartbeat period (100 ms) */
+    uint16_t drive_heartbeat_ms;   /* asked of each drive (0x1017) (50) */
+    uint32_t heartbeat_timeout_us; /* drive declared lost after (300 ms) */
+    uint32_t sdo_timeout_us;       /* one SDO attempt (50 ms) */
+    unsigned sdo_attempts;         /* before the drive is declared mute (3) */
+    uint32_t enable_timeout_us;    /* bring-up to Operation Enabled (2 s) */
+    uint32_t retry_after_us;       /* wait before recovering a fault (1 s) */
+};
+
+/* Defaults above; scale 1000 counts per degree, offset 0. */
+void qrtcan_master_config_default(struct qrtcan_master_config *cfg);
+
+enum qrtcan_master_state {
+    QRTCAN_MASTER_OFF,      /* not started, or shut down */
+    QRTCAN_MASTER_STARTING, /* NMT + SDO configuration of the drives */
+    QRTCAN_MASTER_ENABLING, /* state machine towards Operation Enabled */
+    QRTCAN_MASTER_READY,    /* enabled, holding position, no path */
+    QRTCAN_MASTER_MOVING,   /* executing a path */
+    QRTCAN_MASTER_STOPPED,  /* quick stop commanded; holding */
+    QRTCAN_MASTER_FAULT     /* a drive, a heartbeat or the bus failed */
+};
+
+/* Why the master stopped or faulted (the latest reason). */
+enum qrtcan_master_reason {
+    QRTCAN_REASON_NONE,
+    QRTCAN_REASON_COMMANDED,      /* qrtcan_master_quick_stop (path blocked) */
+    QRTCAN_REASON_DRIVE_FAULT,    /* statusword fault or an EMCY */
+    QRTCAN_REASON_HEARTBEAT_LOST, /* a drive's heartbeat went missing */
+    QRTCAN_REASON_SDO_TIMEOUT,    /* a drive did not answer an SDO */
+    QRTCAN_REASON_SDO_ABORT,      /* a drive refused a configuration write */
+    QRTCAN_REASON_ENABLE_TIMEOUT, /* Operation Enabled not reached in time */
+    QRTCAN_REASON_BUS,            /* the caller reported a bus error */
+    QRTCAN_REASON_SHUTDOWN
+};
+
+struct qrtcan_drive {
+    unsigned node;
+    int heartbeat_seen;
+    uint64_t last_heartbeat_us;
+    int nmt_state; /* from the heartbeat, -1 before one */
+    int tpdo_seen;
+    uint16_t statusword;
+    int32_t position_counts;
+    uint16_t controlword; /* what we send in RPDO1 */
+    int32_t target_counts;
+    uint16_t last_emcy;
+    /* SDO configuration in progress */
+    unsigned sdo_step;
+    unsigned sdo_attempt;
+    int sdo_waiting;
+    uint64_t sdo_sent_us;
+};
+
+struct qrtcan_master_status {
+    enum qrtcan_master_state state;
+    enum qrtcan_master_reason reason;
+    unsigned reason_node; /* the drive concerned, 0 if none */
+    uint16_t reason_code; /* EMCY code or SDO abort low half, if any */
+    /* from the drives' TPDOs: the three answers to one SYNC once there are
+     * such (so the three angles are of the same moment), else the latest */
+    double joints_deg[QRTCAN_JOINTS];
+    uint16_t statusword[QRTCAN_JOINTS];
+    enum qrtcan_402_state drive_state[QRTCAN_JOINTS];
+    int all_positions_known; /* every drive has sent a TPDO */
+    int waypoint;            /* index of the waypoint being approached */
+    int n_waypoints;
+    int path_done; /* the last path reached its goal */
+    unsigned long frames_in, frames_ignored, frames_malformed;
+    unsigned long frames_out, frames_dropped; /* outbox overflow */
+    unsigned long recoveries;
+};
+
+struct qrtcan_master {
+    struct qrtcan_master_config cfg;
+    enum qrtcan_master_state state;
+    enum qrtcan_master_reason reason;
+    unsigned reason_node;
+    uint16_t reason_code;
+    uint64_t state_since_us, last_sync_us, last_heartbeat_us;
+    int started; /* the caller wants the drives enabled */
+    struct qrtcan_drive drive[QRTCAN_JOINTS];
+    /* the path: waypoints in degrees, the segment being executed */
+    double path_deg[QRTCAN_MASTER_MAX_WAYPOINTS][QRTCAN_JOINTS];
+    int n_waypoints, waypoint, path_done;
+    int segment_phase; /* 0 profiles by SDO, 1 set-point, 2 travel */
+    int32_t segment_counts[QRTCAN_JOINTS];      /* the segment's targets */
+    uint32_t segment_profile[3][QRTCAN_JOINTS]; /* velocity, accel, decel */
+    /* positions the drives sampled at the same SYNC */
+    int32_t sync_counts[QRTCAN_JOINTS], coherent_counts[QRTCAN_JOINTS];
+    unsigned sync_answers; /* bit j: drive j answered the last SYNC */
+    int coherent;
+    /* the outbox */
+    struct qrtcan_frame out[QRTCAN_MASTER_OUTBOX];
+    int out_head, out_count;
+    unsigned long frames_in, frames_ignored, frames_malformed;
+    unsigned long frames_out, frames_dropped, recoveries;
+};
+
+/* QRTCAN_E_ARG for invalid node ids (0, > 127, repeated), bad scales,
+ * non-positive speeds or zero periods. */
+int qrtcan_master_init(struct qrtcan_master *m,
+                       const struct qrtcan_master_config *cfg, uint64_t now_us);
+
+/* Bring the drives up (NMT, profile position mode, heartbeats) and enable
+ * them; the master then holds their position until a path arrives. */
+void qrtcan_master_start(struct qrtcan_master *m, uint64_t now_us);
+
+/* On shutdown: quick stop every drive and leave them holding position in
+ * Quick Stop Active (not voltage off: an arm without brakes would fall).
+ * The master then stops its SYNC and heartbeat, so the drives' own
+ * communication watchdogs take over. */
+void qrtcan_master_shutdown(struct qrtcan_master *m, uint64_t now_us);
+
+/* A path to execute from where the arm stands. waypoints[0] must be the
+ * arm's present position (within 1 degree per joint, else QRTCAN_E_RANGE:
+ * the master never makes a move nobody planned). Accepted only with the
+ * arm at rest: READY, or STOPPED once every drive reports its quick stop
+ * finished (target reached); QRTCAN_E_CMD otherwise (MOVING: stop first,
+ * or wait for the path to finish). QRTCAN_E_ARG for n outside
+ * 1..QRTCAN_MASTER_MAX_WAYPOINTS or non-finite values. */
+int qrtcan_master_set_path(struct qrtcan_master *m, const double (*wp)[3],
+                           int n, uint64_t now_us);
+
+/* Stop now: quick stop to every drive, queued ahead of anything else. The
+ * master stays STOPPED until the next path (which re-enables the drives). */
+void qrtcan_master_quick_stop(struct qrtcan_master *m, uint64_t now_us);
+
+/* The caller's CAN layer failed (interface down, bus-off, no buffer):
+ * treated as losing every drive; recovery starts when frames flow again. */
+void qrtcan_master_bus_error(struct qrtcan_master *m, uint64_t now_us);
+
+/* A received frame. Returns QRTCAN_OK if it was used, QRTCAN_E_ID if it was
+ * not for us (counted as ignored), another negative code if it was ours but
+ * malformed (counted; never acted upon). */
+int qrtcan_master_on_frame(struct qrtcan_master *m,
+                           const struct qrtcan_frame *f, uint64_t now_us);
+
+/* Timeouts, SYNC and heartbeat production, the next step of bring-up and
+ * of the set-point handshake. */
+void qrtcan_master_tick(struct qrtcan_master *m, uint64_t now_us);
+
+/* Up to max frames to send, oldest first (quick stops first of all). */
+int qrtcan_master_take_frames(struct qrtcan_master *m, struct qrtcan_frame *out,
+                              int max);
+
+void qrtcan_master_get_status(const struct qrtcan_master *m,
+                              struct qrtcan_master_status *st);
+
+const char *qrtcan_master_state_name(enum qrtcan_master_state s);
+const char *qrtcan_master_reason_name(enum qrtcan_master_reason r);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

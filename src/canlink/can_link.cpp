@@ -1,0 +1,265 @@
+// SocketCAN transport and thread for the CiA 402 master; see can_link.hpp.
+#include "can_link.hpp"
+
+#include <cerrno>
+#include <cstring>
+#include <ctime>
+
+#include <linux/can.h>
+#include <linux/can/error.h>
+#include <linux/can/raw.h>
+#include <net/if.h>
+#include <poll.h>
+#include <sys/ioctl.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+namespace qrt
+{
+
+namespace
+{
+constexpr uint64_t kReopenUs = 500000;   // retry a failed socket
+constexpr uint64_t kNoBufferUs = 100000; // ENOBUFS this long is a bus fault
+constexpr size_t kMaxPending = 256;
+} // namespace
+
+uint64_t CanLink::now_us()
+{
+    timespec ts{};
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return uint64_t(ts.tv_sec) * 1000000u + uint64_t(ts.tv_nsec) / 1000u;
+}
+
+CanLink::CanLink(std::string iface, const qrtcan_master_config &cfg)
+    : iface_(std::move(iface)), cfg_(cfg)
+{
+}
+
+CanLink::~CanLink()
+{
+    if (thread_.joinable()) {
+        {
+            std::lock_guard<std::mutex> lock(mu_);
+            uint64_t now = now_us();
+            pending_.clear();
+            qrtcan_master_shutdown(&master_, now);
+            flush(now);
+        }
+        stop_ = true;
+        thread_.join();
+    }
+    close_socket();
+}
+
+bool CanLink::start(std::string *why)
+{
+    std::lock_guard<std::mutex> lock(mu_);
+    uint64_t now = now_us();
+    int rc = qrtcan_master_init(&master_, &cfg_, now);
+    if (rc != QRTCAN_OK) {
+        if (why)
+            *why = std::string("CAN master configuration refused: ") +
+                   qrtcan_strerror(rc);
+        return false;
+    }
+    open_socket(now);
+    qrtcan_master_start(&master_, now);
+    thread_ = std::thread(&CanLink::run, this);
+    return true;
+}
+
+void CanLink::open_socket(uint64_t now)
+{
+    close_socket();
+    next_open_us_ = now + kReopenUs;
+    int fd = socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW);
+    if (fd < 0) {
+        link_ = std::string("no SocketCAN: ") + std::strerror(errno);
+        return;
+    }
+    ifreq ifr{};
+    if (iface_.size() >= sizeof ifr.ifr_name) {
+        link_ = "interface name too long: " + iface_;
+        ::close(fd);
+        return;
+    }
+    std::memcpy(ifr.ifr_name, iface_.c_str(), iface_.size() + 1);
+    if (ioctl(fd, SIOCGIFINDEX, &ifr) < 0) {
+        link_ = iface_ + ": " + std::strerror(errno);
+        ::close(fd);
+        return;
+    }
+    can_err_mask_t errs =
+        CAN_ERR_BUSOFF | CAN_ERR_CRTL | CAN_ERR_RESTARTED | CAN_ERR_TX_TIMEOUT;
+    setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &errs, sizeof errs);
+    sockaddr_can addr{};
+    addr.can_family = AF_CAN;
+    addr.can_ifindex = ifr.ifr_ifindex;
+    if (bind(fd, reinterpret_cast<sockaddr *>(&addr), sizeof addr) < 0) {
+        link_ = iface_ + ": bind: " + std::strerror(errno);
+        ::close(fd);
+        return;
+    }
+    fd_ = fd;
+    link_ = "up";
+}
+
+void CanLink::close_socket()
+{
+    if (fd_ >= 0)
+        ::close(fd_);
+    fd_ = -1;
+}
+
+void CanLink::bus_error(uint64_t now, const std::string &why)
+{
+    bus_errors_++;
+    link_ = why;
+    pending_.clear(); // stale; the master queues a quick stop instead
+    qrtcan_master_bus_error(&master_, now);
+}
+
+void CanLink::flush(uint64_t now)
+{
+    qrtcan_frame taken[QRTCAN_MASTER_OUTBOX];
+    int n = qrtcan_master_take_frames(&master_, taken, QRTCAN_MASTER_OUTBOX);
+    pending_.insert(pending_.end(), taken, taken + n);
+    if (pending_.size() > kMaxPending) // the bus has been refusing for long
+        pending_.erase(pending_.begin(),
+                       pending_.begin() + long(pending_.size() - kMaxPending));
+    if (fd_ < 0)
+        return;
+    size_t written = 0;
+    while (written < pending_.size()) {
+        const qrtcan_frame &q = pending_[written];
+        can_frame f{};
+        f.can_id = q.id & CAN_SFF_MASK;
+        f.can_dlc = q.dlc;
+        std::memcpy(f.data, q.data, q.dlc);
+        ssize_t rc = ::write(fd_, &f, sizeof f);
+        if (rc == ssize_t(sizeof f)) {
+            written++;
+            nobuf_since_ = 0;
+            if (q.id >= 0x200 && q.id < 0x280 && q.dlc >= 2 &&
+                (q.data[0] | (q.data[1] << 8)) == QRTCAN_CW_CMD_QUICK_STOP)
+                last_quick_stop_us_ = now_us();
+            continue;
+        }
+        if (errno == EAGAIN || errno == ENOBUFS || errno == EINTR) {
+            write_retries_++;
+            if (nobuf_since_ == 0)
+                nobuf_since_ = now;
+            else if (now - nobuf_since_ > kNoBufferUs) {
+                nobuf_since_ = 0;
+                pending_.erase(pending_.begin(),
+                               pending_.begin() + long(written));
+                bus_error(now, std::string("no buffer space for ") +
+                                   std::to_string(kNoBufferUs / 1000) + " ms");
+                return;
+            }
+            break;
+        }
+        std::string why = "down: " + std::string(std::strerror(errno));
+        pending_.erase(pending_.begin(), pending_.begin() + long(written));
+        close_socket();
+        bus_error(now, why);
+        return;
+    }
+    pending_.erase(pending_.begin(), pending_.begin() + long(written));
+}
+
+void CanLink::run()
+{
+    while (!stop_) {
+        int fd;
+        {
+            std::lock_guard<std::mutex> lock(mu_);
+            fd = fd_;
+        }
+        if (fd >= 0) {
+            pollfd p{fd, POLLIN, 0};
+            poll(&p, 1, 1);
+        } else {
+            usleep(1000);
+        }
+        std::lock_guard<std::mutex> lock(mu_);
+        uint64_t now = now_us();
+        if (fd_ < 0 && now >= next_open_us_)
+            open_socket(now);
+        for (int i = 0; fd_ >= 0 && i < 256; i++) {
+            can_frame f{};
+            ssize_t rc = ::read(fd_, &f, sizeof f);
+            if (rc < 0) {
+                if (errno != EAGAIN && errno != EINTR) {
+                    std::string why =
+                        "down: " + std::string(std::strerror(errno));
+                    close_socket();
+                    bus_error(now, why);
+                }
+                break;
+            }
+            if (rc != ssize_t(sizeof f))
+                continue; // not a classic CAN frame
+            if (f.can_id & CAN_ERR_FLAG) {
+                if (f.can_id & CAN_ERR_BUSOFF)
+                    bus_error(now, "bus-off");
+                else if (f.can_id & CAN_ERR_RESTARTED)
+                    link_ = "up";
+                continue;
+            }
+            if (f.can_id & (CAN_EFF_FLAG | CAN_RTR_FLAG))
+                continue; // CANopen here is 11-bit data frames only
+            qrtcan_frame q{};
+            q.id = f.can_id & CAN_SFF_MASK;
+            q.dlc = f.can_dlc > 8 ? 8 : f.can_dlc;
+            std::memcpy(q.data, f.data, q.dlc);
+            if (link_ != "up")
+                link_ = "up"; // frames flow again
+            qrtcan_master_on_frame(&master_, &q, now);
+        }
+        qrtcan_master_tick(&master_, now);
+        flush(now);
+    }
+}
+
+int CanLink::set_path(const std::vector<std::array<double, 3>> &waypoints)
+{
+    double wp[QRTCAN_MASTER_MAX_WAYPOINTS][3];
+    if (waypoints.empty() || waypoints.size() > QRTCAN_MASTER_MAX_WAYPOINTS)
+        return QRTCAN_E_ARG;
+    for (size_t i = 0; i < waypoints.size(); i++)
+        for (int j = 0; j < 3; j++)
+            wp[i][j] = waypoints[i][size_t(j)];
+    std::lock_guard<std::mutex> lock(mu_);
+    uint64_t now = now_us();
+    int rc = qrtcan_master_set_path(&master_, wp, int(waypoints.size()), now);
+    if (rc == QRTCAN_OK) {
+        qrtcan_master_tick(&master_, now);
+        flush(now);
+    }
+    return rc;
+}
+
+void CanLink::quick_stop()
+{
+    std::lock_guard<std::mutex> lock(mu_);
+    uint64_t now = now_us();
+    pending_.clear(); // set-points not yet written must not follow the stop
+    qrtcan_master_quick_stop(&master_, now);
+    flush(now);
+}
+
+CanLinkStatus CanLink::status() const
+{
+    std::lock_guard<std::mutex> lock(mu_);
+    CanLinkStatus s;
+    qrtcan_master_get_status(&master_, &s.master);
+    s.link = link_;
+    s.bus_errors = bus_errors_;
+    s.write_retries = write_retries_;
+    s.last_quick_stop_us = last_quick_stop_us_;
+    return s;
+}
+
+} // namespace qrt

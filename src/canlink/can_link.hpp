@@ -1,0 +1,82 @@
+// The daemon's CAN side: the CiA 402 master (include/qrtcan/master.h) run on
+// its own thread over a SocketCAN raw socket.
+//
+// The thread polls the socket with a 1 ms timeout, hands every frame to the
+// master, ticks it, and writes what it queued. Socket errors never end the
+// thread: an interface that goes down (ENETDOWN), disappears (ENODEV), runs
+// out of buffers (ENOBUFS) or reports bus-off (an error frame) is reported
+// to the master as a bus error (the drives are then treated as lost, quick
+// stop is sent as soon as the bus takes frames again) and the socket is
+// reopened every half second until it works.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+extern "C" {
+#include "qrtcan/master.h"
+}
+
+namespace qrt
+{
+
+struct CanLinkStatus {
+    qrtcan_master_status master{};
+    std::string link; // "up", or why not ("down: Network is down", ...)
+    unsigned long bus_errors = 0;
+    unsigned long write_retries = 0; // ENOBUFS and the like
+    uint64_t last_quick_stop_us = 0; // CLOCK_MONOTONIC when written
+};
+
+class CanLink
+{
+  public:
+    CanLink(std::string iface, const qrtcan_master_config &cfg);
+    ~CanLink(); // quick stop, disable the drives, stop the thread
+    CanLink(const CanLink &) = delete;
+    CanLink &operator=(const CanLink &) = delete;
+
+    // Starts the thread and the drives' bring-up. False (with why) only for
+    // a configuration the master refuses; a missing interface is retried.
+    bool start(std::string *why);
+
+    // A path from where the arm stands (see qrtcan_master_set_path).
+    // Returns QRTCAN_OK or the master's refusal.
+    int set_path(const std::vector<std::array<double, 3>> &waypoints);
+
+    // Stop now; the quick-stop frames are written before this returns
+    // (unless the bus is down).
+    void quick_stop();
+
+    CanLinkStatus status() const;
+
+    static uint64_t now_us();
+
+  private:
+    void run();
+    void open_socket(uint64_t now);
+    void close_socket();
+    void flush(uint64_t now); // call with mu_ held
+    void bus_error(uint64_t now, const std::string &why);
+
+    std::string iface_;
+    qrtcan_master_config cfg_;
+    mutable std::mutex mu_;
+    qrtcan_master master_{};
+    int fd_ = -1;
+    std::string link_ = "not started";
+    uint64_t next_open_us_ = 0;
+    unsigned long bus_errors_ = 0, write_retries_ = 0;
+    uint64_t last_quick_stop_us_ = 0;
+    uint64_t nobuf_since_ = 0;          // first ENOBUFS of the present run
+    std::vector<qrtcan_frame> pending_; // taken from the master, not written
+    std::atomic<bool> stop_{false};
+    std::thread thread_;
+};
+
+} // namespace qrt

@@ -1,0 +1,431 @@
+/* The CiA 402 master (src/canmaster) against three simulated drives
+ * (firmware_sim/drive.c, the servo_sim firmware) on a bus in memory, with
+ * a virtual clock: bring-up, paths followed as straight joint-space
+ * segments, alpha across +-180 degrees, quick stop and restart, a drive
+ * fault, a mute drive, a bus error, and garbage frames. The same master
+ * runs over real SocketCAN in the VM tests (tests/can). */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "../../firmware_sim/drive.h"
+#include "../unit/check.h"
+#include "qrtcan/master.h"
+
+#define BUS_MAX 4096
+#define STEP_US 250u
+
+static struct qrtcan_frame bus[BUS_MAX];
+static int bus_count;
+static uint64_t clock_us = 1000;
+static struct drive drives[3];
+static struct qrtcan_master m;
+static double worst_off_line; /* degrees from the planned segment */
+static int torque_dropped;    /* a drive passed Switch On Disabled */
+static unsigned long frames_lost;
+
+static int mem_send(void *ctx, const struct qrtcan_frame *f)
+{
+    (void)ctx;
+    if (bus_count == BUS_MAX) {
+        frames_lost++;
+        return -1;
+    }
+    bus[bus_count++] = *f;
+    return 0;
+}
+
+static int mem_receive(void *ctx, struct qrtcan_frame *f, uint32_t timeout)
+{
+    (void)ctx;
+    (void)f;
+    (void)timeout;
+    return 0;
+}
+
+static uint64_t mem_now(void *ctx)
+{
+    (void)ctx;
+    return clock_us;
+}
+
+static const struct can_driver can = {NULL, mem_send, mem_receive, mem_now};
+
+static double drive_deg(int j)
+{
+    return drives[j].pos / 1000.0;
+}
+
+/* One step of the world: master and drives exchange what they sent. */
+static void step(void)
+{
+    struct qrtcan_frame out[QRTCAN_MASTER_OUTBOX];
+    int n, i, j;
+    clock_us += STEP_US;
+    qrtcan_master_tick(&m, clock_us);
+    n = qrtcan_master_take_frames(&m, out, QRTCAN_MASTER_OUTBOX);
+    for (i = 0; i < n; i++)
+        for (j = 0; j < 3; j++)
+            drive_on_frame(&drives[j], &out[i], &can);
+    for (j = 0; j < 3; j++)
+        drive_tick(&drives[j], &can);
+    for (i = 0; i < bus_count; i++) {
+        qrtcan_master_on_frame(&m, &bus[i], clock_us);
+        for (j = 0; j < 3; j++)
+            drive_on_frame(&drives[j], &bus[i], &can);
+    }
+    bus_count = 0;
+}
+
+static enum qrtcan_master_state state(void)
+{
+    struct qrtcan_master_status st;
+    qrtcan_master_get_status(&m, &st);
+    return st.state;
+}
+
+static int run_until(enum qrtcan_master_state want, double seconds)
+{
+    uint64_t end = clock_us + (uint64_t)(seconds * 1e6);
+    while (clock_us < end) {
+        step();
+        if (state() == want)
+            return 1;
+    }
+    return 0;
+}
+
+/* Distance (degrees) of the drives' joint point from the straight segment
+ * a-b (alpha unwrapped, as the drive counts it). */
+static double off_segment(const double a[3], const double b[3])
+{
+    double p[3], ab[3], ap[3], t = 0.0, len2 = 0.0, d2 = 0.0;
+    int j;
+    for (j = 0; j < 3; j++) {
+        p[j] = drive_deg(j);
+        ab[j] = b[j] - a[j];
+        ap[j] = p[j] - a[j];
+        len2 += ab[j] * ab[j];
+        t += ap[j] * ab[j];
+    }
+    t = len2 > 0.0 ? t / len2 : 0.0;
+    t = t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t;
+    for (j = 0; j < 3; j++)
+        d2 += (ap[j] - t * ab[j]) * (ap[j] - t * ab[j]);
+    return sqrt(d2);
+}
+
+/* Execute a path; wp in degrees, alpha as the planner gives it. unwrapped
+ * holds the same waypoints with alpha continuous (what the drive sees). */
+static int follow(const double (*wp)[3], const double (*unwrapped)[3], int n,
+                  double seconds)
+{
+    uint64_t end = clock_us + (uint64_t)(seconds * 1e6);
+    int rc = qrtcan_master_set_path(&m, wp, n, clock_us);
+    CHECK(rc == QRTCAN_OK, "set_path refused: %d", rc);
+    if (rc != QRTCAN_OK)
+        return 0;
+    while (clock_us < end) {
+        struct qrtcan_master_status st;
+        int k;
+        double best = 1e9;
+        step();
+        /* the arm must be on one of the segments at every moment */
+        for (k = 0; k + 1 < n; k++) {
+            double d = off_segment(unwrapped[k], unwrapped[k + 1]);
+            best = d < best ? d : best;
+        }
+        if (n > 1 && best > worst_off_line)
+            worst_off_line = best;
+        for (k = 0; k < 3; k++)
+            torque_dropped |=
+                drives[k].state == QRTCAN_402_SWITCH_ON_DISABLED ||
+                drives[k].state == QRTCAN_402_READY_TO_SWITCH_ON;
+        qrtcan_master_get_status(&m, &st);
+        if (st.state == QRTCAN_MASTER_READY && st.path_done)
+            return 1;
+        if (st.state == QRTCAN_MASTER_FAULT)
+            return 0;
+    }
+    return 0;
+}
+
+static void power_up(void)
+{
+    struct qrtcan_master_config cfg;
+    int j;
+    memset(drives, 0, sizeof drives);
+    bus_count = 0;
+    for (j = 0; j < 3; j++) {
+        struct drive_config dc;
+        memset(&dc, 0, sizeof dc);
+        dc.node = (unsigned)j + 1;
+        dc.limit_min = -400000;
+        dc.limit_max = 400000;
+        dc.servo_error = 3; /* 0.003 degrees */
+        dc.watchdog_ms = 200;
+        dc.heartbeat_ms = 0;
+        dc.master_node = 127;
+        dc.start_position = 0;
+        drive_init(&drives[j], &dc, &can);
+    }
+    qrtcan_master_config_default(&cfg);
+    CHECK(qrtcan_master_init(&m, &cfg, clock_us) == QRTCAN_OK, "init");
+    qrtcan_master_start(&m, clock_us);
+}
+
+int main(void)
+{
+    static const double path1[3][3] = {{0, 0, 0}, {20, 10, -15}, {-10, 35, 5}};
+    static const double path2[2][3] = {{-10, 35, 5}, {170, 35, 5}};
+    static const double wrap[2][3] = {{170, 35, 5}, {-170, 30, 0}};
+    static const double wrap_unwrapped[2][3] = {{170, 35, 5}, {190, 30, 0}};
+    struct qrtcan_master_status st;
+    struct qrtcan_master_config bad;
+    double here[1][3];
+    int j, i;
+
+    /* configuration refused */
+    qrtcan_master_config_default(&bad);
+    bad.node[1] = bad.node[0];
+    CHECK(qrtcan_master_init(&m, &bad, 0) == QRTCAN_E_ARG, "repeated node");
+    qrtcan_master_config_default(&bad);
+    bad.scale[2].counts_per_deg = NAN;
+    CHECK(qrtcan_master_init(&m, &bad, 0) == QRTCAN_E_ARG, "NaN scale");
+
+    /* bring-up */
+    power_up();
+    CHECK(run_until(QRTCAN_MASTER_READY, 2.0), "drives not enabled");
+    for (j = 0; j < 3; j++) {
+        CHECK(drives[j].state == QRTCAN_402_OPERATION_ENABLED, "drive %d in %s",
+              j + 1, qrtcan_402_state_name(drives[j].state));
+        CHECK(drives[j].mode_display == QRTCAN_MODE_PROFILE_POSITION,
+              "drive %d mode %d", j + 1, drives[j].mode_display);
+        CHECK(drives[j].nmt == QRTCAN_NMT_OPERATIONAL, "drive %d NMT", j + 1);
+    }
+
+    /* a path: every moment on a segment, every waypoint reached */
+    CHECK(follow(path1, path1, 3, 20.0), "path 1 not completed");
+    for (j = 0; j < 3; j++)
+        CHECK(fabs(drive_deg(j) - path1[2][j]) < 0.01, "joint %d at %g", j,
+              drive_deg(j));
+    CHECK(worst_off_line < 0.05, "left the segments by %g deg", worst_off_line);
+    printf("path 1: worst distance from the planned segments %.4f deg\n",
+           worst_off_line);
+
+    /* alpha across +-180 the short way: the drive goes 170 -> 190 */
+    CHECK(follow(path2, path2, 2, 20.0), "path 2 not completed");
+    worst_off_line = 0.0;
+    CHECK(follow(wrap, wrap_unwrapped, 2, 20.0), "wrap path not completed");
+    CHECK(fabs(drive_deg(0) - 190.0) < 0.01, "alpha drive at %g, not 190",
+          drive_deg(0));
+    CHECK(worst_off_line < 0.05, "wrap left the segment by %g deg",
+          worst_off_line);
+    qrtcan_master_get_status(&m, &st);
+    CHECK(fabs(st.joints_deg[0] + 170.0) < 0.01, "alpha reported %g",
+          st.joints_deg[0]);
+
+    /* refused: a path that does not start where the arm is */
+    {
+        static const double far[2][3] = {{0, 0, 0}, {10, 10, 10}};
+        CHECK(qrtcan_master_set_path(&m, far, 2, clock_us) == QRTCAN_E_RANGE,
+              "a path from elsewhere must be refused");
+        static const double nan_path[2][3] = {{-170, 30, 0}, {NAN, 0, 0}};
+        CHECK(qrtcan_master_set_path(&m, nan_path, 2, clock_us) == QRTCAN_E_ARG,
+              "NaN waypoint");
+    }
+
+    /* quick stop in the middle of a move, then a new path from there */
+    {
+        static const double long_move[2][3] = {{-170, 30, 0}, {-60, 90, 60}};
+        uint64_t t0;
+        double before[3];
+        CHECK(qrtcan_master_set_path(&m, long_move, 2, clock_us) == QRTCAN_OK,
+              "long move");
+        for (i = 0; i < 4000; i++)
+            step(); /* 1 s in */
+        CHECK(state() == QRTCAN_MASTER_MOVING, "not moving: %s",
+              qrtcan_master_state_name(state()));
+        qrtcan_master_quick_stop(&m, clock_us);
+        CHECK(qrtcan_master_set_path(&m, long_move, 2, clock_us) ==
+                  QRTCAN_E_CMD,
+              "a path while the stop ramps down must be refused");
+        t0 = clock_us;
+        for (i = 0; i < 8000; i++)
+            step();
+        for (j = 0; j < 3; j++) {
+            CHECK(drives[j].state == QRTCAN_402_QUICK_STOP_ACTIVE,
+                  "drive %d in %s after quick stop", j + 1,
+                  qrtcan_402_state_name(drives[j].state));
+            CHECK(drives[j].vel == 0.0, "drive %d still moving", j + 1);
+            before[j] = drive_deg(j);
+        }
+        (void)t0;
+        qrtcan_master_get_status(&m, &st);
+        CHECK(st.state == QRTCAN_MASTER_STOPPED &&
+                  st.reason == QRTCAN_REASON_COMMANDED,
+              "state %s reason %s", qrtcan_master_state_name(st.state),
+              qrtcan_master_reason_name(st.reason));
+        for (i = 0; i < 4000; i++)
+            step();
+        for (j = 0; j < 3; j++)
+            CHECK(fabs(drive_deg(j) - before[j]) < 1e-9, "drifted after stop");
+        for (j = 0; j < 3; j++)
+            here[0][j] = st.joints_deg[j];
+        {
+            double resume[2][3], resume_unwrapped[2][3];
+            for (j = 0; j < 3; j++) {
+                resume[0][j] = here[0][j];
+                resume[1][j] = long_move[1][j];
+                resume_unwrapped[0][j] = drive_deg(j);
+                resume_unwrapped[1][j] = long_move[1][j];
+            }
+            resume_unwrapped[1][0] =
+                drive_deg(0) + (long_move[1][0] - here[0][0]);
+            worst_off_line = 0.0;
+            torque_dropped = 0;
+            CHECK(follow((const double(*)[3])resume,
+                         (const double(*)[3])resume_unwrapped, 2, 20.0),
+                  "no restart after a quick stop");
+            CHECK(!torque_dropped, "the restart switched a drive off");
+            CHECK(worst_off_line < 0.05, "restart left the segment by %g",
+                  worst_off_line);
+        }
+    }
+
+    /* a drive fault while moving: everyone stops, the master says who and
+     * why, recovers, and the next path runs */
+    {
+        static const double move[2][3] = {{-60, 90, 60}, {0, 40, 0}};
+        CHECK(qrtcan_master_set_path(&m, move, 2, clock_us) == QRTCAN_OK,
+              "move");
+        for (i = 0; i < 2000; i++)
+            step();
+        drive_fault(&drives[1], 0x2310, &can);
+        for (i = 0; i < 40; i++)
+            step();
+        qrtcan_master_get_status(&m, &st);
+        CHECK(st.state == QRTCAN_MASTER_FAULT &&
+                  st.reason == QRTCAN_REASON_DRIVE_FAULT &&
+                  st.reason_node == 2 && st.reason_code == 0x2310,
+              "fault: %s %s node %u code %04x",
+              qrtcan_master_state_name(st.state),
+              qrtcan_master_reason_name(st.reason), st.reason_node,
+              st.reason_code);
+        CHECK(drives[0].state == QRTCAN_402_QUICK_STOP_ACTIVE &&
+                  drives[2].state == QRTCAN_402_QUICK_STOP_ACTIVE,
+              "the healthy drives were not stopped: %s %s",
+              qrtcan_402_state_name(drives[0].state),
+              qrtcan_402_state_name(drives[2].state));
+        CHECK(run_until(QRTCAN_MASTER_READY, 5.0), "no recovery from fault");
+        qrtcan_master_get_status(&m, &st);
+        CHECK(st.recoveries >= 1, "recoveries %lu", st.recoveries);
+        {
+            double from[2][3];
+            for (j = 0; j < 3; j++) {
+                from[0][j] = st.joints_deg[j];
+                from[1][j] = move[1][j];
+            }
+            CHECK(qrtcan_master_set_path(&m, (const double(*)[3])from, 2,
+                                         clock_us) == QRTCAN_OK,
+                  "path after recovery");
+            CHECK(run_until(QRTCAN_MASTER_READY, 20.0), "path after fault");
+            CHECK(fabs(drive_deg(1) - 0.0) < 40.01, "sigma");
+        }
+    }
+
+    /* a drive that stops answering: heartbeat lost, then back */
+    {
+        for (j = 0; j < 3; j++)
+            drives[j].heartbeat_ms = 50; /* the master asked for these */
+        for (i = 0; i < 2000; i++)
+            step();
+        drives[2].muted = 1;
+        CHECK(run_until(QRTCAN_MASTER_FAULT, 1.0), "mute drive unnoticed");
+        qrtcan_master_get_status(&m, &st);
+        CHECK(st.reason == QRTCAN_REASON_HEARTBEAT_LOST && st.reason_node == 3,
+              "reason %s node %u", qrtcan_master_reason_name(st.reason),
+              st.reason_node);
+        for (i = 0; i < 12000; i++)
+            step(); /* retries time out on SDO while it stays mute */
+        qrtcan_master_get_status(&m, &st);
+        CHECK(st.state == QRTCAN_MASTER_FAULT, "mute drive: %s",
+              qrtcan_master_state_name(st.state));
+        drives[2].muted = 0;
+        CHECK(run_until(QRTCAN_MASTER_READY, 5.0),
+              "no recovery when the drive answers again");
+    }
+
+    /* the caller's bus fails: fault, then recovery */
+    qrtcan_master_bus_error(&m, clock_us);
+    qrtcan_master_get_status(&m, &st);
+    CHECK(st.state == QRTCAN_MASTER_FAULT && st.reason == QRTCAN_REASON_BUS,
+          "bus error: %s", qrtcan_master_state_name(st.state));
+    CHECK(run_until(QRTCAN_MASTER_READY, 5.0), "no recovery from bus error");
+
+    /* garbage: never acted on, counted, nothing moves */
+    {
+        uint64_t seed = 12345;
+        unsigned long before_bad;
+        double pos[3];
+        qrtcan_master_get_status(&m, &st);
+        before_bad = st.frames_malformed + st.frames_ignored;
+        for (j = 0; j < 3; j++)
+            pos[j] = drive_deg(j);
+        for (i = 0; i < 20000; i++) {
+            struct qrtcan_frame f;
+            int b;
+            seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+            f.id = (uint32_t)(seed >> 33) & 0xFFF;
+            f.dlc = (uint8_t)((seed >> 20) % 10);
+            for (b = 0; b < 8; b++)
+                f.data[b] = (uint8_t)(seed >> (b * 7));
+            /* identifiers our drives use get a length no such frame has:
+             * malformed, so it must be counted and never acted upon */
+            if ((f.id & 0x780) == 0x180 || (f.id & 0x780) == 0x700 ||
+                (f.id & 0x780) == 0x080 || (f.id & 0x780) == 0x580)
+                f.dlc = 0;
+            qrtcan_master_on_frame(&m, &f, clock_us);
+        }
+        for (i = 0; i < 400; i++)
+            step();
+        qrtcan_master_get_status(&m, &st);
+        CHECK(st.state == QRTCAN_MASTER_READY, "garbage changed state to %s",
+              qrtcan_master_state_name(st.state));
+        CHECK(st.frames_malformed + st.frames_ignored - before_bad >= 20000,
+              "garbage not counted");
+        for (j = 0; j < 3; j++)
+            CHECK(fabs(drive_deg(j) - pos[j]) < 0.01, "garbage moved joint %d",
+                  j);
+    }
+
+    /* shutdown in the middle of a move: quick stop, and the drives hold
+     * (their watchdogs see the master go quiet) instead of switching off */
+    {
+        double from[2][3];
+        qrtcan_master_get_status(&m, &st);
+        for (j = 0; j < 3; j++) {
+            from[0][j] = st.joints_deg[j];
+            from[1][j] = st.joints_deg[j] + 30.0;
+        }
+        CHECK(qrtcan_master_set_path(&m, (const double(*)[3])from, 2,
+                                     clock_us) == QRTCAN_OK,
+              "move before shutdown");
+        for (i = 0; i < 2000; i++)
+            step();
+        qrtcan_master_shutdown(&m, clock_us);
+        for (i = 0; i < 8000; i++)
+            step();
+        for (j = 0; j < 3; j++) {
+            CHECK(drives[j].state == QRTCAN_402_QUICK_STOP_ACTIVE ||
+                      drives[j].state == QRTCAN_402_FAULT,
+                  "drive %d in %s after shutdown", j + 1,
+                  qrtcan_402_state_name(drives[j].state));
+            CHECK(drives[j].vel == 0.0, "drive %d moves after shutdown", j + 1);
+            CHECK(fabs(drive_deg(j) - from[1][j]) > 1.0,
+                  "drive %d finished the move despite the shutdown", j + 1);
+        }
+    }
+    CHECK(frames_lost == 0, "bus overflow in the test itself");
+    return test_done("test_master");
+}
