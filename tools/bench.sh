@@ -20,3 +20,19 @@ if command -v valgrind >/dev/null; then
     echo "callgrind, 10 spheres x 1444 points, one end-to-end plan (init," \
         "points, mask, plan): $total instructions" | tee -a "$out/table5.txt"
 fi
+
+# qrtpland: scan-to-plan latency over LCM (issue 4), 10 x 1444 at 20 Hz
+if [ -x build/bin/qrtpland ]; then
+    .venv/bin/python tools/bench_daemon.py --scans "${QRT_BENCH_DAEMON_SCANS:-1000}" \
+        --out "$out" | tee -a "$out/table5.txt"
+fi
+
+# scan that blocks the executing path -> quick-stop frame on the bus, in the
+# SocketCAN VM (issue 5); skipped with a message where there is no vcan
+if [ -x build/bin/qrtpland ] && [ -x build/bin/servo_sim ]; then
+    tools/vm/run.sh -- .venv/bin/python tests/canlink/test_daemon_can_vm.py \
+        --daemon build/bin/qrtpland --servo-sim build/bin/servo_sim \
+        --dbc can/qrtplan.dbc --lcmtypes build/lcmtypes/python \
+        --trials "${QRT_BENCH_STOP_TRIALS:-200}" --out "$out/stop_latency" |
+        grep -E "quick-stop frame|failures" | tee -a "$out/table5.txt" || true
+fi

@@ -86,5 +86,12 @@ else
     failed=$((failed + 1))
 fi
 
+echo "== libFuzzer: qrtpland's LCM message intake, ${fuzz_seconds} s"
+if tools/fuzz_lcm.sh "$fuzz_seconds"; then
+    passed=$((passed + 1))
+else
+    failed=$((failed + 1))
+fi
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -122,6 +122,16 @@ int qrt_planner_build_mask_end(struct qrt_planner *pl);
 int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
                      const struct qrt_target *goal, struct qrt_plan *plan);
 
+/* Is a path still safe on the built mask (a replan's question about the
+ * path being executed)? *first_blocked is the index of the first segment
+ * (waypoint i to i+1) that cannot be proved free, or -1 if every segment is
+ * (same certificate as the planner's own motions: the mask walk, else
+ * conservative advancement against the points). QRT_E_INVALID for a stale
+ * mask, n < 1 or NaN/Inf; QRT_E_LIMITS for a waypoint outside the limits. */
+int qrt_planner_check_path(const struct qrt_planner *pl,
+                           const double (*waypoints_deg)[3], int n,
+                           int *first_blocked);
+
 #ifdef __cplusplus
 }
 #endif

@@ -509,3 +509,32 @@ int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
     set_status(plan, QRT_STATUS_OK, "path found");
     return QRT_OK;
 }
+
+int qrt_planner_check_path(const struct qrt_planner *pl,
+                           const double (*waypoints_deg)[3], int n,
+                           int *first_blocked)
+{
+    double radius[3];
+    int i, j;
+    *first_blocked = -1;
+    if (pl->mask_stale || n < 1)
+        return QRT_E_INVALID;
+    for (i = 0; i < n; i++) {
+        for (j = 0; j < 3; j++)
+            if (!isfinite(waypoints_deg[i][j]))
+                return QRT_E_INVALID;
+        if (qrt_arm_check_joints(&pl->params.arm, waypoints_deg[i]) != QRT_OK)
+            return QRT_E_LIMITS;
+    }
+    exact_radii(pl, radius);
+    for (i = 0; i + 1 < n; i++)
+        if (!qrt_motion_free_on_mask(&pl->mask, waypoints_deg[i],
+                                     waypoints_deg[i + 1]) &&
+            !qrt_motion_free_exact(&pl->params.arm, radius, &pl->points,
+                                   &pl->mask.lat, waypoints_deg[i],
+                                   waypoints_deg[i + 1], EXACT_MAX_STEPS)) {
+            *first_blocked = i;
+            return QRT_OK;
+        }
+    return QRT_OK;
+}

@@ -1,0 +1,524 @@
+#include "daemon.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <thread>
+
+#include "decode.hpp"
+#include "log.hpp"
+#include "qrtplan/daemon_status_t.hpp"
+#include "qrtplan/joint_state_t.hpp"
+#include "qrtplan/plan_t.hpp"
+
+namespace qrt
+{
+
+namespace
+{
+
+double wrap180(double d)
+{
+    double r = std::fmod(d, 360.0);
+    if (r <= -180.0)
+        r += 360.0;
+    else if (r > 180.0)
+        r -= 360.0;
+    return r;
+}
+
+// Largest joint difference, alpha the short way.
+double joint_gap(const double a[3], const double b[3])
+{
+    double g = std::fabs(wrap180(a[0] - b[0]));
+    for (int j = 1; j < 3; j++)
+        g = std::max(g, std::fabs(a[j] - b[j]));
+    return g;
+}
+
+} // namespace
+
+int64_t Daemon::now_us()
+{
+    return std::chrono::duration_cast<std::chrono::microseconds>(
+               std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+}
+
+int64_t Daemon::wall_us()
+{
+    return std::chrono::duration_cast<std::chrono::microseconds>(
+               std::chrono::system_clock::now().time_since_epoch())
+        .count();
+}
+
+Daemon::Daemon(const Options &opts)
+    : opts_(opts), lcm_(opts.lcm_url), planner_(new qrt_planner),
+      picture_(opts.window_s)
+{
+}
+
+Daemon::~Daemon() = default;
+
+void Daemon::reject(const std::string &why)
+{
+    last_error_ = why; // caller holds mu_
+    log(LogLevel::warn, "%s", why.c_str());
+}
+
+// --- the LCM thread --------------------------------------------------------
+
+void Daemon::on_scan(const lcm::ReceiveBuffer *rbuf, const std::string &channel)
+{
+    int64_t t = now_us();
+    std::string why;
+    PendingScan p;
+    p.received_us = t;
+    bool ok = scan_claims_fit(rbuf->data, int(rbuf->data_size),
+                              opts_.max_returns, &why);
+    if (ok && safe_decode(&p.msg, rbuf->data, int(rbuf->data_size)) < 0) {
+        ok = false;
+        why = "not a qrtplan.range_scan_t (wrong type fingerprint or "
+              "truncated, " +
+              std::to_string(rbuf->data_size) + " bytes)";
+    }
+    if (ok) {
+        // refused here, a bad scan never displaces a good pending one
+        why = check_scan(p.msg, opts_.max_returns);
+        ok = why.empty();
+    }
+    std::lock_guard<std::mutex> lock(mu_);
+    if (!ok) {
+        scans_rejected_++;
+        reject(channel + ": scan refused: " + why);
+        return;
+    }
+    scans_received_++;
+    auto it = pending_scans_.find(p.msg.sensor_id);
+    if (it != pending_scans_.end()) {
+        scans_dropped_++; // latest wins: the older one was never used
+        it->second = std::move(p);
+    } else {
+        std::string id = p.msg.sensor_id;
+        pending_scans_.emplace(id, std::move(p));
+    }
+    wake_.notify_one();
+}
+
+void Daemon::on_request(const lcm::ReceiveBuffer *rbuf,
+                        const std::string &channel)
+{
+    qrtplan::plan_request_t r;
+    int rc = safe_decode(&r, rbuf->data, int(rbuf->data_size));
+    std::lock_guard<std::mutex> lock(mu_);
+    if (rc < 0) {
+        requests_rejected_++;
+        reject(channel +
+               ": not a qrtplan.plan_request_t (wrong type "
+               "fingerprint or truncated, " +
+               std::to_string(rbuf->data_size) + " bytes)");
+        return;
+    }
+    requests_received_++;
+    pending_request_ = r;
+    have_pending_request_ = true;
+    request_received_us_ = now_us();
+    wake_.notify_one();
+}
+
+void Daemon::on_joints(const lcm::ReceiveBuffer *rbuf,
+                       const std::string &channel)
+{
+    qrtplan::joint_state_t js;
+    // fingerprint 8, utime 8, joints 24, moving 1, then drive_state
+    int rc = lcm_string_ok(rbuf->data, int(rbuf->data_size), 41)
+                 ? safe_decode(&js, rbuf->data, int(rbuf->data_size))
+                 : -1;
+    std::lock_guard<std::mutex> lock(mu_);
+    if (rc < 0 || !std::isfinite(js.joints_deg[0]) ||
+        !std::isfinite(js.joints_deg[1]) || !std::isfinite(js.joints_deg[2])) {
+        reject(channel + ": joint state refused (wrong type, truncated or "
+                         "non-finite)");
+        return;
+    }
+    for (int j = 0; j < 3; j++)
+        joints_[size_t(j)] = js.joints_deg[j];
+    have_joints_ = true;
+}
+
+// --- the planner thread ----------------------------------------------------
+
+bool Daemon::current_joints(std::array<double, 3> *q)
+{
+    if (can_) {
+        CanLinkStatus st = can_->status();
+        if (!st.master.all_positions_known)
+            return false;
+        for (int j = 0; j < 3; j++)
+            (*q)[size_t(j)] = st.master.joints_deg[j];
+        return true;
+    }
+    std::lock_guard<std::mutex> lock(mu_);
+    *q = joints_;
+    return have_joints_;
+}
+
+void Daemon::build_mask()
+{
+    qrt_planner *pl = planner_.get();
+    if (opts_.mask_threads < 2) {
+        qrt_planner_build_mask(pl);
+        return;
+    }
+    qrt_planner_build_mask_begin(pl);
+    std::thread other([pl] { qrt_planner_build_mask_part(pl, 1, 2); });
+    qrt_planner_build_mask_part(pl, 0, 2);
+    other.join();
+    qrt_planner_build_mask_end(pl);
+}
+
+void Daemon::publish_plan(const qrt_plan *plan, const char *status,
+                          const std::string &detail, bool blocked,
+                          int64_t ingest, int64_t mask, int64_t search,
+                          int64_t trigger_us)
+{
+    qrtplan::plan_t out{};
+    out.request_id = goal_.request_id;
+    out.scan_utime = picture_.newest_utime();
+    out.status = status;
+    out.detail = detail;
+    out.executing_path_blocked = blocked;
+    out.ingest_us = ingest;
+    out.mask_us = mask;
+    out.search_us = search;
+    if (plan) {
+        out.n_waypoints = plan->status == QRT_STATUS_OK ? plan->n_waypoints : 0;
+        for (int i = 0; i < out.n_waypoints; i++)
+            out.waypoints_deg.push_back({plan->waypoints_deg[i][0],
+                                         plan->waypoints_deg[i][1],
+                                         plan->waypoints_deg[i][2]});
+        out.cost_deg = plan->cost_deg;
+        for (int j = 0; j < 3; j++) {
+            out.start_deg[j] = plan->start_deg[j];
+            out.goal_deg[j] = plan->goal_deg[j];
+        }
+        out.points = int32_t(plan->points);
+        out.points_dropped = int32_t(plan->points_dropped);
+        out.voxel_m = plan->voxel_m;
+    }
+    out.returns_invalid = int32_t(returns_invalid_);
+    out.utime = wall_us();
+    out.total_us = now_us() - trigger_us;
+    lcm_.publish(opts_.plan_channel, &out);
+    std::lock_guard<std::mutex> lock(mu_);
+    plans_published_++;
+    last_latency_us_ = out.total_us;
+    points_dropped_ = out.points_dropped;
+}
+
+void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
+                    int64_t trigger_us)
+{
+    qrt_planner *pl = planner_.get();
+    int64_t t0 = now_us();
+    long invalid = 0;
+    for (auto &kv : scans) {
+        ScanPoints sp;
+        std::string why = scan_to_points(kv.second.msg, opts_.max_returns, &sp);
+        if (!why.empty()) {
+            std::lock_guard<std::mutex> lock(mu_);
+            scans_rejected_++;
+            reject("scan from '" + kv.first + "' refused: " + why);
+            continue;
+        }
+        invalid += sp.invalid;
+        if (sp.invalid > 0)
+            log(LogLevel::debug, "scan from '%s': %ld returns NaN/Inf or <= 0",
+                kv.first.c_str(), sp.invalid);
+        picture_.add(std::move(sp));
+    }
+    int64_t t1 = now_us();
+    returns_invalid_ = invalid;
+    picture_.gather(&gather_);
+    {
+        std::lock_guard<std::mutex> lock(mu_);
+        picture_points_ = long(gather_.size() / 3);
+    }
+    if (!have_goal_)
+        return; // the picture is kept up to date; nothing to plan for
+    qrt_planner_clear_points(pl);
+    qrt_planner_add_points(pl, gather_.data(), long(gather_.size() / 3));
+    build_mask();
+    int64_t t2 = now_us();
+
+    // the path being executed: still free on the new mask?
+    bool blocked = false;
+    std::array<double, 3> here{};
+    bool know_here = current_joints(&here);
+    CanLinkStatus cs;
+    if (can_)
+        cs = can_->status();
+    if (!executing_.empty()) {
+        Path rest;
+        if (can_ && cs.master.state == QRTCAN_MASTER_MOVING && know_here) {
+            rest.push_back(here);
+            for (size_t i = size_t(std::max(cs.master.waypoint, 1));
+                 i < executing_.size(); i++)
+                rest.push_back(executing_[i]);
+        } else if (!can_) {
+            rest = executing_;
+        }
+        int first = -1;
+        if (rest.size() >= 2 &&
+            qrt_planner_check_path(
+                pl, reinterpret_cast<const double(*)[3]>(rest.data()),
+                int(rest.size()), &first) == QRT_OK &&
+            first >= 0) {
+            blocked = true;
+            if (can_)
+                can_->quick_stop(); // before anything else
+            log(LogLevel::warn,
+                "the path being executed is blocked (segment %d)%s", first,
+                can_ ? ": quick stop sent" : "");
+            executing_.clear();
+        }
+    }
+
+    qrt_target start{}, goal{};
+    goal.kind = goal_.goal_kind == qrtplan::plan_request_t::GOAL_XYZ
+                    ? QRT_TARGET_XYZ
+                    : QRT_TARGET_JOINTS;
+    for (int j = 0; j < 3; j++)
+        goal.value[j] = goal_.goal[j];
+    start.kind = QRT_TARGET_JOINTS;
+    if (goal_.has_start && (new_request || !know_here)) {
+        for (int j = 0; j < 3; j++)
+            start.value[j] = goal_.start_deg[j];
+    } else if (know_here) {
+        for (int j = 0; j < 3; j++)
+            start.value[j] = here[size_t(j)];
+    } else {
+        publish_plan(nullptr, "invalid_request",
+                     "no start: the request has none and no joint state has "
+                     "been received on " +
+                         opts_.joint_channel,
+                     blocked, t1 - t0, t2 - t1, 0, trigger_us);
+        return;
+    }
+    static qrt_plan plan; // 6 KiB: not on the thread's stack
+    int rc = qrt_planner_plan(pl, &start, &goal, &plan);
+    int64_t t3 = now_us();
+    if (rc != QRT_OK) {
+        std::string why = std::string("the request is invalid: ") +
+                          qrt_err_name(rc) +
+                          (rc == QRT_E_LIMITS ? " (joints outside the limits)"
+                                              : " (NaN/Inf or a bad goal)");
+        {
+            std::lock_guard<std::mutex> lock(mu_);
+            reject(why);
+        }
+        publish_plan(nullptr, "invalid_request", why, blocked, t1 - t0, t2 - t1,
+                     t3 - t2, trigger_us);
+        return;
+    }
+    publish_plan(&plan, qrt_plan_status_name(plan.status),
+                 plan.detail ? plan.detail : "", blocked, t1 - t0, t2 - t1,
+                 t3 - t2, trigger_us);
+    if (plan.status != QRT_STATUS_OK)
+        return;
+    Path path;
+    for (int i = 0; i < plan.n_waypoints; i++)
+        path.push_back({plan.waypoints_deg[i][0], plan.waypoints_deg[i][1],
+                        plan.waypoints_deg[i][2]});
+    if (!can_) {
+        executing_ = path;
+        return;
+    }
+    // the drives take a new path only at rest; a free path being executed
+    // goes on (it was just checked)
+    cs = can_->status();
+    bool at_rest = cs.master.state == QRTCAN_MASTER_READY ||
+                   cs.master.state == QRTCAN_MASTER_STOPPED;
+    if (at_rest && path.size() >= 2 &&
+        joint_gap(path.front().data(), path.back().data()) > 0.01) {
+        int r = can_->set_path(path);
+        if (r == QRTCAN_OK) {
+            executing_ = path;
+            log(LogLevel::info, "executing a path of %zu waypoints",
+                path.size());
+        } else {
+            log(LogLevel::debug, "drives did not take the path yet: %s",
+                qrtcan_strerror(r));
+        }
+    }
+}
+
+void Daemon::planner_loop(const std::atomic<bool> &stop)
+{
+    while (!stop) {
+        std::map<std::string, PendingScan> scans;
+        bool new_request = false;
+        int64_t trigger = 0;
+        {
+            std::unique_lock<std::mutex> lock(mu_);
+            wake_.wait_for(lock, std::chrono::milliseconds(50), [&] {
+                return stop || !pending_scans_.empty() || have_pending_request_;
+            });
+            scans.swap(pending_scans_);
+            if (have_pending_request_) {
+                have_pending_request_ = false;
+                new_request = true;
+                goal_ = pending_request_;
+                trigger = request_received_us_;
+            }
+        }
+        for (auto &kv : scans)
+            trigger = std::max(trigger, kv.second.received_us);
+        if (new_request) {
+            bool finite = true;
+            for (int j = 0; j < 3; j++)
+                finite =
+                    finite && std::isfinite(goal_.goal[j]) &&
+                    (!goal_.has_start || std::isfinite(goal_.start_deg[j]));
+            if (!finite ||
+                (goal_.goal_kind != qrtplan::plan_request_t::GOAL_XYZ &&
+                 goal_.goal_kind != qrtplan::plan_request_t::GOAL_JOINTS)) {
+                {
+                    std::lock_guard<std::mutex> lock(mu_);
+                    requests_rejected_++;
+                    reject("plan request " + std::to_string(goal_.request_id) +
+                           " refused: NaN/Inf or an unknown goal kind");
+                }
+                publish_plan(nullptr, "invalid_request",
+                             "NaN/Inf values or an unknown goal kind", false, 0,
+                             0, 0, trigger);
+                have_goal_ = false;
+                continue;
+            }
+            have_goal_ = true;
+            executing_.clear();
+        }
+        // with the drives idle short of the goal, plan again without a scan
+        bool resume = false;
+        if (can_ && have_goal_ && scans.empty() && !new_request) {
+            CanLinkStatus cs = can_->status();
+            std::array<double, 3> here{};
+            if (cs.master.state == QRTCAN_MASTER_READY &&
+                current_joints(&here) &&
+                goal_.goal_kind == qrtplan::plan_request_t::GOAL_JOINTS &&
+                joint_gap(here.data(), goal_.goal) > 0.5 &&
+                (executing_.empty() || cs.master.path_done)) {
+                resume = true;
+                trigger = now_us();
+            }
+        }
+        if (scans.empty() && !new_request && !resume)
+            continue;
+        replan(scans, new_request || resume, trigger);
+    }
+}
+
+// --- the clock thread ------------------------------------------------------
+
+void Daemon::clock_loop(const std::atomic<bool> &stop)
+{
+    int64_t next_status = now_us();
+    while (!stop) {
+        int64_t t = now_us();
+        if (can_) {
+            CanLinkStatus cs = can_->status();
+            if (cs.master.all_positions_known) {
+                qrtplan::joint_state_t js{};
+                js.utime = wall_us();
+                for (int j = 0; j < 3; j++)
+                    js.joints_deg[j] = cs.master.joints_deg[j];
+                js.moving = cs.master.state == QRTCAN_MASTER_MOVING;
+                js.drive_state = qrtcan_master_state_name(cs.master.state);
+                lcm_.publish(opts_.joint_channel, &js);
+            }
+        }
+        if (t >= next_status) {
+            next_status = t + 1000000;
+            qrtplan::daemon_status_t s{};
+            s.utime = wall_us();
+            std::string can_state = "off";
+            if (can_) {
+                CanLinkStatus cs = can_->status();
+                can_state =
+                    std::string(qrtcan_master_state_name(cs.master.state)) +
+                    ", link " + cs.link;
+                if (cs.master.reason != QRTCAN_REASON_NONE)
+                    can_state += std::string(", ") +
+                                 qrtcan_master_reason_name(cs.master.reason);
+            }
+            {
+                std::lock_guard<std::mutex> lock(mu_);
+                s.uptime_s = double(t - started_us_) * 1e-6;
+                s.scans_received = scans_received_;
+                s.scans_dropped = scans_dropped_;
+                s.scans_rejected = scans_rejected_;
+                s.requests_received = requests_received_;
+                s.requests_rejected = requests_rejected_;
+                s.plans_published = plans_published_;
+                s.last_plan_latency_us = last_latency_us_;
+                s.points_in_picture = int32_t(picture_points_);
+                s.points_dropped = int32_t(points_dropped_);
+                s.last_error = last_error_;
+            }
+            s.can_state = can_state;
+            lcm_.publish(opts_.status_channel, &s);
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+}
+
+// --- run -------------------------------------------------------------------
+
+int Daemon::run(const std::atomic<bool> &stop)
+{
+    if (!lcm_.good()) {
+        log(LogLevel::error, "cannot open LCM at %s", opts_.lcm_url.c_str());
+        return 1;
+    }
+    int rc = qrt_planner_init(planner_.get(), &opts_.params);
+    if (rc != QRT_OK) {
+        log(LogLevel::error, "planner settings refused: %s", qrt_err_name(rc));
+        return 2;
+    }
+    if (!opts_.can_iface.empty()) {
+        can_.reset(new CanLink(opts_.can_iface, opts_.can));
+        std::string why;
+        if (!can_->start(&why)) {
+            log(LogLevel::error, "%s", why.c_str());
+            return 2;
+        }
+        log(LogLevel::info, "CAN: drives on %s", opts_.can_iface.c_str());
+    }
+    started_us_ = now_us();
+    lcm_.subscribe(opts_.scan_channel + "(_.*)?", &Daemon::on_scan, this);
+    lcm_.subscribe(opts_.request_channel, &Daemon::on_request, this);
+    if (!can_)
+        lcm_.subscribe(opts_.joint_channel, &Daemon::on_joints, this);
+    log(LogLevel::info, "listening on %s (scans %s*, requests %s)",
+        opts_.lcm_url.c_str(), opts_.scan_channel.c_str(),
+        opts_.request_channel.c_str());
+    std::thread planner([&] { planner_loop(stop); });
+    std::thread clock([&] { clock_loop(stop); });
+    while (!stop)
+        if (lcm_.handleTimeout(100) < 0) {
+            log(LogLevel::error, "LCM receive failed; retrying");
+            std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        }
+    wake_.notify_all();
+    planner.join();
+    clock.join();
+    if (can_) {
+        can_->quick_stop();
+        can_.reset(); // leaves the drives holding (docs/can-master.md)
+        log(LogLevel::info, "drives stopped");
+    }
+    log(LogLevel::info, "shut down");
+    return 0;
+}
+
+} // namespace qrt

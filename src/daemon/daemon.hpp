@@ -1,0 +1,95 @@
+// The qrtplan daemon: LCM in and out, the planning core, and (with --can)
+// the arm's drives.
+//
+// Three threads: LCM (decodes and validates messages, keeps only the newest
+// scan per sensor and the newest request: a flood replaces, never queues),
+// the planner (ingest, mask, path check, plan, publish), and the clock (the
+// 1 Hz status and, with CAN, the joint state at 20 Hz).
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include "can_link.hpp"
+#include "ingest.hpp"
+#include "options.hpp"
+#include "qrtplan/plan_request_t.hpp"
+#include "qrtplan/range_scan_t.hpp"
+
+extern "C" {
+#include "qrtplan/qrtplan.h"
+}
+
+namespace qrt
+{
+
+class Daemon
+{
+  public:
+    explicit Daemon(const Options &opts);
+    ~Daemon();
+    // Runs until stop becomes true. Returns the exit status.
+    int run(const std::atomic<bool> &stop);
+
+  private:
+    struct PendingScan {
+        qrtplan::range_scan_t msg;
+        int64_t received_us;
+    };
+    using Path = std::vector<std::array<double, 3>>;
+
+    void on_scan(const lcm::ReceiveBuffer *rbuf, const std::string &channel);
+    void on_request(const lcm::ReceiveBuffer *rbuf, const std::string &channel);
+    void on_joints(const lcm::ReceiveBuffer *rbuf, const std::string &channel);
+    void planner_loop(const std::atomic<bool> &stop);
+    void clock_loop(const std::atomic<bool> &stop);
+    void replan(std::map<std::string, PendingScan> &scans, bool new_request,
+                int64_t trigger_us);
+    void build_mask();
+    void publish_plan(const qrt_plan *plan, const char *status,
+                      const std::string &detail, bool blocked, int64_t ingest,
+                      int64_t mask, int64_t search, int64_t trigger_us);
+    bool current_joints(std::array<double, 3> *q);
+    void reject(const std::string &why);
+    static int64_t now_us();
+    static int64_t wall_us();
+
+    Options opts_;
+    lcm::LCM lcm_;
+    std::unique_ptr<CanLink> can_;
+    std::unique_ptr<qrt_planner> planner_;
+    Picture picture_;
+
+    std::mutex mu_; // guards everything below
+    std::condition_variable wake_;
+    std::map<std::string, PendingScan> pending_scans_;
+    bool have_pending_request_ = false;
+    qrtplan::plan_request_t pending_request_{};
+    int64_t request_received_us_ = 0;
+    bool have_joints_ = false;
+    std::array<double, 3> joints_{};
+    int64_t scans_received_ = 0, scans_dropped_ = 0, scans_rejected_ = 0;
+    int64_t requests_received_ = 0, requests_rejected_ = 0;
+    int64_t plans_published_ = 0, last_latency_us_ = 0;
+    long picture_points_ = 0, points_dropped_ = 0;
+    std::string last_error_;
+    int64_t started_us_ = 0;
+
+    // planner thread only
+    bool have_goal_ = false;
+    qrtplan::plan_request_t goal_{};
+    Path executing_; // the last ok plan (what the arm is following)
+    std::vector<double> gather_;
+    long returns_invalid_ = 0; // NaN/Inf or <= 0 ranges of the last ingest
+};
+
+} // namespace qrt

@@ -1,0 +1,169 @@
+#include "ingest.hpp"
+
+#include <cmath>
+#include <cstring>
+
+#include <Eigen/Dense>
+
+namespace qrt
+{
+
+namespace
+{
+
+int32_t get_i32(const uint8_t *p)
+{
+    return int32_t(uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 |
+                   uint32_t(p[2]) << 8 | uint32_t(p[3]));
+}
+
+} // namespace
+
+bool scan_claims_fit(const void *buf, int size, long max_returns,
+                     std::string *why)
+{
+    const uint8_t *b = static_cast<const uint8_t *>(buf);
+    // fingerprint 8, utime 8, sensor_id (length 4 + bytes), position 24,
+    // orientation 32, max_range 4, n 4, then 3 float arrays of n
+    long pos = 16;
+    if (size < pos + 4) {
+        *why = "truncated (" + std::to_string(size) + " bytes)";
+        return false;
+    }
+    int32_t len = get_i32(b + pos);
+    if (len < 1 || len > size) {
+        *why = "bad sensor_id length";
+        return false;
+    }
+    pos += 4 + len + 24 + 32 + 4;
+    if (size < pos + 4) {
+        *why = "truncated (" + std::to_string(size) + " bytes)";
+        return false;
+    }
+    int32_t n = get_i32(b + pos);
+    pos += 4;
+    if (n < 0 || long(n) > max_returns) {
+        *why = "claims " + std::to_string(n) + " returns (limit " +
+               std::to_string(max_returns) + ")";
+        return false;
+    }
+    if (size - pos < 12L * n) {
+        *why = "claims " + std::to_string(n) + " returns but holds " +
+               std::to_string(size) + " bytes";
+        return false;
+    }
+    return true;
+}
+
+std::string check_scan(const qrtplan::range_scan_t &s, long max_returns)
+{
+    if (s.sensor_id.size() > 64)
+        return "sensor_id longer than 64 characters";
+    for (char ch : s.sensor_id)
+        if (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f)
+            return "sensor_id with control characters";
+    for (double v : s.position_m)
+        if (!std::isfinite(v) || std::fabs(v) > 1e3)
+            return "non-finite or absurd sensor position";
+    for (double v : s.orientation)
+        if (!std::isfinite(v))
+            return "non-finite orientation";
+    Eigen::Quaterniond q(s.orientation[0], s.orientation[1], s.orientation[2],
+                         s.orientation[3]);
+    double norm = q.norm();
+    if (std::fabs(norm - 1.0) > 1e-3)
+        return "orientation is not a unit quaternion (norm " +
+               std::to_string(norm) + ")";
+    if (!std::isfinite(s.max_range_m) || s.max_range_m <= 0.0f)
+        return "max_range_m must be positive and finite";
+    if (s.n < 0 || long(s.n) > max_returns)
+        return "too many returns (" + std::to_string(s.n) + ")";
+    return "";
+}
+
+std::string scan_to_points(const qrtplan::range_scan_t &s, long max_returns,
+                           ScanPoints *out)
+{
+    out->sensor = s.sensor_id;
+    out->utime = s.utime;
+    out->xyz.clear();
+    out->no_hit = out->invalid = 0;
+    std::string why = check_scan(s, max_returns);
+    if (!why.empty())
+        return why;
+    Eigen::Quaterniond q(s.orientation[0], s.orientation[1], s.orientation[2],
+                         s.orientation[3]);
+    const Eigen::Index n = s.n;
+    if (n == 0)
+        return "";
+    Eigen::Map<const Eigen::ArrayXf> az(s.azimuth_rad.data(), n);
+    Eigen::Map<const Eigen::ArrayXf> el(s.elevation_rad.data(), n);
+    Eigen::Map<const Eigen::ArrayXf> r(s.range_m.data(), n);
+    // a return counts when all three numbers are finite and 0 < r < max
+    Eigen::Array<bool, Eigen::Dynamic, 1> finite =
+        az.isFinite() && el.isFinite() && r.isFinite();
+    Eigen::Array<bool, Eigen::Dynamic, 1> hit =
+        finite && r > 0.0f && r < s.max_range_m;
+    out->invalid = long((!finite || (finite && r <= 0.0f)).count());
+    out->no_hit = long((finite && r >= s.max_range_m).count());
+    // directions in the sensor frame, whole arrays at a time
+    Eigen::ArrayXd ce = el.cast<double>().cos(), se = el.cast<double>().sin();
+    Eigen::ArrayXd ca = az.cast<double>().cos(), sa = az.cast<double>().sin();
+    Eigen::ArrayXd rd = r.cast<double>();
+    Eigen::Matrix3Xd local(3, n);
+    local.row(0) = (rd * ce * ca).matrix().transpose();
+    local.row(1) = (rd * ce * sa).matrix().transpose();
+    local.row(2) = (rd * se).matrix().transpose();
+    Eigen::Matrix3d R = q.normalized().toRotationMatrix();
+    Eigen::Vector3d t(s.position_m[0], s.position_m[1], s.position_m[2]);
+    Eigen::Matrix3Xd world = (R * local).colwise() + t;
+    long kept = long(hit.count());
+    out->xyz.resize(size_t(kept) * 3);
+    long k = 0;
+    for (Eigen::Index i = 0; i < n; i++)
+        if (hit(i)) {
+            std::memcpy(&out->xyz[size_t(k) * 3], world.col(i).data(),
+                        3 * sizeof(double));
+            k++;
+        }
+    return "";
+}
+
+void Picture::add(ScanPoints &&scan)
+{
+    if (scan.utime > newest_)
+        newest_ = scan.utime;
+    auto &q = sensors_[scan.sensor];
+    if (window_s_ <= 0.0)
+        q.clear();
+    q.push_back(std::move(scan));
+    const int64_t keep_from = newest_ - int64_t(window_s_ * 1e6);
+    while (!q.empty() && (q.size() > kMaxScansPerSensor ||
+                          (window_s_ > 0.0 && q.front().utime < keep_from)))
+        q.pop_front();
+    // other sensors' scans may have aged out of the window too
+    if (window_s_ > 0.0)
+        for (auto &kv : sensors_)
+            while (!kv.second.empty() && kv.second.front().utime < keep_from)
+                kv.second.pop_front();
+}
+
+void Picture::gather(std::vector<double> *xyz) const
+{
+    xyz->clear();
+    xyz->reserve(size_t(points()) * 3);
+    for (const auto &kv : sensors_)
+        for (const auto &s : kv.second)
+            xyz->insert(xyz->end(), s.xyz.begin(), s.xyz.end());
+}
+
+long Picture::points() const
+{
+    long n = 0;
+    for (const auto &kv : sensors_)
+        for (const auto &s : kv.second)
+            n += long(s.xyz.size() / 3);
+    return n;
+}
+
+} // namespace qrt

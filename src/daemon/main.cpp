@@ -1,0 +1,40 @@
+// qrtpland: see daemon.hpp and `qrtpland --help`.
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+
+#include "daemon.hpp"
+#include "log.hpp"
+#include "options.hpp"
+
+namespace
+{
+std::atomic<bool> stop_requested{false};
+void on_signal(int)
+{
+    stop_requested = true;
+}
+} // namespace
+
+int main(int argc, char **argv)
+{
+    qrt::Options opts;
+    std::string error;
+    int rc = qrt::parse_options(argc, argv, &opts, &error);
+    if (rc == 1)
+        return 0;
+    if (rc != 0) {
+        std::fprintf(stderr, "qrtpland: %s\n", error.c_str());
+        return 2;
+    }
+    qrt::LogLevel level = qrt::LogLevel::info;
+    qrt::parse_log_level(opts.log_level.c_str(), &level);
+    qrt::set_log_level(level);
+    struct sigaction sa {
+    };
+    sa.sa_handler = on_signal;
+    sigaction(SIGINT, &sa, nullptr);
+    sigaction(SIGTERM, &sa, nullptr);
+    qrt::Daemon daemon(opts);
+    return daemon.run(stop_requested);
+}

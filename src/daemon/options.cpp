@@ -1,0 +1,249 @@
+#include "options.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+namespace qrt
+{
+
+const char *kUsage =
+    "usage: qrtpland [--config FILE] [options]\n"
+    "The qrtplan daemon: turns range scans into obstacle points, replans on\n"
+    "every scan towards the newest plan request, and publishes plans, the\n"
+    "joint state and a 1 Hz status on LCM. With --can it drives the arm's\n"
+    "three CiA 402 drives and stops them when a scan blocks the path being\n"
+    "executed.\n"
+    "\n"
+    "Options (also as `key = value` lines in the config file, without --):\n"
+    "  --lcm-url URL            (udpm://239.255.76.67:7667?ttl=0)\n"
+    "  --scan-channel NAME      scans on NAME and NAME_* (QRT_SCAN); each\n"
+    "                           sensor_id keeps its own entry\n"
+    "  --request-channel NAME   plan requests (QRT_PLAN_REQUEST)\n"
+    "  --plan-channel NAME      plans out (QRT_PLAN)\n"
+    "  --joint-channel NAME     joint state: published with --can, else\n"
+    "                           read from the drives' publisher "
+    "(QRT_JOINT_STATE)\n"
+    "  --status-channel NAME    1 Hz daemon status (QRT_STATUS)\n"
+    "  --window SECONDS         obstacle picture = every scan of the last\n"
+    "                           SECONDS per sensor (0: the latest scan only)\n"
+    "  --mask-threads 1|2       build the mask on 1 or 2 threads (2)\n"
+    "  --max-returns N          refuse scans with more returns (1000000)\n"
+    "  --margin M               workspace margin, metres (0.01)\n"
+    "  --cspace-margin DEG      C-space margin (paper Eq. 12), degrees (0)\n"
+    "  --grid DEG               lattice spacing, degrees (5)\n"
+    "  --link-radius M          every link's radius, metres (0.02)\n"
+    "  --dijkstra               plain Dijkstra instead of A* (same cost)\n"
+    "  --can IFACE              drive the arm on SocketCAN IFACE (off)\n"
+    "  --can-nodes A,B,C        drive node ids of alpha, sigma, eta (1,2,3)\n"
+    "  --counts-per-deg X       drive counts per degree (1000)\n"
+    "  --speed DEG_S            top joint speed (30)\n"
+    "  --accel DEG_S2           joint acceleration (60)\n"
+    "  --log-level LEVEL        error, warn, info or debug (info)\n"
+    "  --config FILE            read settings from FILE first\n"
+    "  --help, --version\n"
+    "SIGINT/SIGTERM: quick stop (with --can), then a clean exit.\n";
+
+namespace
+{
+
+bool to_double(const std::string &s, double *out)
+{
+    char *end = nullptr;
+    errno = 0;
+    double v = std::strtod(s.c_str(), &end);
+    if (s.empty() || errno || *end || !std::isfinite(v))
+        return false;
+    *out = v;
+    return true;
+}
+
+// One setting; false with *error set if the key or value is bad.
+bool apply(Options *o, const std::string &key, const std::string &value,
+           std::string *error)
+{
+    double v = 0;
+    auto bad = [&](const char *what) {
+        *error = key + ": " + what + " (got '" + value + "')";
+        return false;
+    };
+    auto number = [&](double lo, double hi) {
+        return to_double(value, &v) && v >= lo && v <= hi;
+    };
+    if (key == "lcm-url")
+        o->lcm_url = value;
+    else if (key == "scan-channel")
+        o->scan_channel = value;
+    else if (key == "request-channel")
+        o->request_channel = value;
+    else if (key == "plan-channel")
+        o->plan_channel = value;
+    else if (key == "joint-channel")
+        o->joint_channel = value;
+    else if (key == "status-channel")
+        o->status_channel = value;
+    else if (key == "window") {
+        if (!number(0, 3600))
+            return bad("seconds in 0..3600");
+        o->window_s = v;
+    } else if (key == "mask-threads") {
+        if (value != "1" && value != "2")
+            return bad("1 or 2");
+        o->mask_threads = value == "1" ? 1 : 2;
+    } else if (key == "max-returns") {
+        if (!number(1, 50000000))
+            return bad("a count in 1..50000000");
+        o->max_returns = long(v);
+    } else if (key == "margin") {
+        if (!number(0, 1))
+            return bad("metres in 0..1");
+        o->params.margin_m = v;
+    } else if (key == "cspace-margin") {
+        if (!number(0, 20))
+            return bad("degrees in 0..20");
+        o->params.cspace_margin_deg = v;
+    } else if (key == "grid") {
+        if (!number(QRT_GRID_DEG_MIN, 20))
+            return bad("degrees (a divisor of 20 at least the build's)");
+        o->params.grid_deg = v;
+    } else if (key == "link-radius") {
+        if (!number(0.001, 0.5))
+            return bad("metres in 0.001..0.5");
+        for (double &r : o->params.arm.link_radius_m)
+            r = v;
+    } else if (key == "dijkstra") {
+        o->params.use_astar = 0;
+    } else if (key == "can") {
+        o->can_iface = value;
+    } else if (key == "can-nodes") {
+        unsigned n[3];
+        char extra;
+        if (std::sscanf(value.c_str(), "%u,%u,%u%c", &n[0], &n[1], &n[2],
+                        &extra) != 3)
+            return bad("three node ids, e.g. 1,2,3");
+        for (int j = 0; j < 3; j++)
+            o->can.node[j] = n[j];
+    } else if (key == "counts-per-deg") {
+        if (!number(-1e7, 1e7) || v == 0)
+            return bad("a non-zero number");
+        for (auto &s : o->can.scale)
+            s.counts_per_deg = v;
+    } else if (key == "speed" || key == "accel") {
+        if (!number(1e-3, 1e4))
+            return bad("a positive number");
+        for (int j = 0; j < 3; j++)
+            (key == "speed" ? o->can.max_speed_deg_s
+                            : o->can.max_accel_deg_s2)[j] = v;
+    } else if (key == "log-level") {
+        if (value != "error" && value != "warn" && value != "info" &&
+            value != "debug")
+            return bad("error, warn, info or debug");
+        o->log_level = value;
+    } else {
+        *error = "unknown setting '" + key + "' (see --help)";
+        return false;
+    }
+    return true;
+}
+
+bool takes_no_value(const std::string &key)
+{
+    return key == "dijkstra";
+}
+
+bool read_config(const std::string &path, Options *o, std::string *error)
+{
+    std::ifstream in(path);
+    if (!in) {
+        *error = path + ": cannot open: " + std::strerror(errno);
+        return false;
+    }
+    std::string line;
+    int lineno = 0;
+    while (std::getline(in, line)) {
+        lineno++;
+        auto hash = line.find('#');
+        if (hash != std::string::npos)
+            line.erase(hash);
+        auto trim = [](std::string s) {
+            size_t a = s.find_first_not_of(" \t\r"),
+                   b = s.find_last_not_of(" \t\r");
+            return a == std::string::npos ? std::string()
+                                          : s.substr(a, b - a + 1);
+        };
+        line = trim(line);
+        if (line.empty())
+            continue;
+        auto eq = line.find('=');
+        std::string key = trim(line.substr(0, eq));
+        std::string value =
+            eq == std::string::npos ? "" : trim(line.substr(eq + 1));
+        if (eq == std::string::npos && !takes_no_value(key)) {
+            *error = path + ":" + std::to_string(lineno) + ": want key = value";
+            return false;
+        }
+        if (!apply(o, key, value, error)) {
+            *error = path + ":" + std::to_string(lineno) + ": " + *error;
+            return false;
+        }
+    }
+    return true;
+}
+
+} // namespace
+
+int parse_options(int argc, char **argv, Options *o, std::string *error)
+{
+    qrt_params_default(&o->params);
+    qrtcan_master_config_default(&o->can);
+    std::vector<std::string> args(argv + 1, argv + argc);
+    // the config file first, so that flags override it
+    for (size_t i = 0; i < args.size(); i++)
+        if (args[i] == "--config") {
+            if (i + 1 >= args.size()) {
+                *error = "--config needs a file";
+                return 2;
+            }
+            if (!read_config(args[i + 1], o, error))
+                return 2;
+        }
+    for (size_t i = 0; i < args.size(); i++) {
+        const std::string &a = args[i];
+        if (a == "--help" || a == "-h") {
+            std::fputs(kUsage, stdout);
+            return 1;
+        }
+        if (a == "--version") {
+            std::printf("qrtpland 0.1.0\n");
+            return 1;
+        }
+        if (a.compare(0, 2, "--") != 0) {
+            *error = "unexpected argument '" + a + "' (see --help)";
+            return 2;
+        }
+        std::string key = a.substr(2);
+        if (key == "config") {
+            i++;
+            continue;
+        }
+        if (takes_no_value(key)) {
+            if (!apply(o, key, "", error))
+                return 2;
+            continue;
+        }
+        if (i + 1 >= args.size()) {
+            *error = a + " needs a value (see --help)";
+            return 2;
+        }
+        if (!apply(o, key, args[++i], error))
+            return 2;
+    }
+    return 0;
+}
+
+} // namespace qrt

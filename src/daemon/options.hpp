@@ -1,0 +1,36 @@
+// qrtpland's settings: defaults, then a config file (--config), then flags.
+#pragma once
+
+#include <string>
+
+extern "C" {
+#include "qrtcan/master.h"
+#include "qrtplan/planner.h"
+}
+
+namespace qrt
+{
+
+struct Options {
+    std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+    std::string scan_channel = "QRT_SCAN"; // and QRT_SCAN_<sensor>...
+    std::string request_channel = "QRT_PLAN_REQUEST";
+    std::string plan_channel = "QRT_PLAN";
+    std::string joint_channel = "QRT_JOINT_STATE";
+    std::string status_channel = "QRT_STATUS";
+    double window_s = 0.0;      // 0: the latest scan of each sensor
+    int mask_threads = 2;       // 1 or 2 (qrt_planner_build_mask_part)
+    long max_returns = 1000000; // per scan; larger scans are rejected
+    qrt_params params{};        // arm, margins, grid (qrt_params_default)
+    std::string can_iface;      // empty: no CAN
+    qrtcan_master_config can{}; // nodes, scales, speeds
+    std::string log_level = "info";
+};
+
+// Fills opts from argv (after defaults and any --config FILE). Returns 0 to
+// run, 1 after printing --help/--version, 2 with *error set on bad input.
+int parse_options(int argc, char **argv, Options *opts, std::string *error);
+
+extern const char *kUsage;
+
+} // namespace qrt

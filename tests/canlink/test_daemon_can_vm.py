@@ -1,0 +1,210 @@
+#!/usr/bin/env python3
+"""qrtpland driving the simulated drives over vcan0, from scans and a goal.
+
+Run by CTest's `daemon_can_vm` through tools/vm/run.sh (inside a VM when
+this host's kernel has no CAN), and by `make bench` for the stop latency
+(--trials 200). servo_sim powers up at the paper's Table 4 start; the
+daemon gets the Table 4 sphere as a scan and a goal with no start, so it
+plans from the joints the drives report, and moves the arm:
+  1. the joints the daemon publishes (from the drives' PDOs) reach the
+     goal, and every pose on the way is collision-free by the oracle;
+  2. trials: while the arm moves, a scan puts an obstacle on the rest of
+     its path; the daemon reports the blocked path and sends a quick stop;
+     the time from that scan's publication to the first quick-stop frame on
+     the bus (candump's timestamp) is the stop latency. A clear scan then
+     lets it move on (the next plan executes);
+  3. every captured frame decodes with the DBC.
+"""
+import argparse
+import os
+import subprocess
+import sys
+import time
+
+import cantools
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REPO = os.path.dirname(os.path.dirname(HERE))
+sys.path[:0] = [os.path.join(REPO, "tools"), os.path.join(REPO, "tests", "daemon")]
+# the VM does not pass the environment on: the generated types' path comes
+# as an argument, before conftest imports them
+if "--lcmtypes" in sys.argv:
+    os.environ["QRT_LCMTYPES_PY"] = sys.argv[sys.argv.index("--lcmtypes") + 1]
+import conftest as cf  # noqa: E402
+import lcm  # noqa: E402
+import oracle  # noqa: E402
+
+failures = []
+
+
+def check(cond, what):
+    print(("ok   " if cond else "FAIL ") + what, flush=True)
+    if not cond:
+        failures.append(what)
+
+
+def quick_stops(capture):
+    """Wall-clock times of quick-stop frames (RPDO1 controlword 0x0002)."""
+    out = []
+    with open(capture) as f:
+        for line in f:
+            parts = line.split()
+            if len(parts) < 3 or "#" not in parts[2]:
+                continue
+            ident, data = parts[2].split("#", 1)
+            if 0x201 <= int(ident, 16) <= 0x27F and data[:4] == "0200":
+                out.append(float(parts[0].strip("()")))
+    return np.array(out)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--daemon", required=True)
+    ap.add_argument("--servo-sim", required=True)
+    ap.add_argument("--dbc", required=True)
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--trials", type=int, default=5)
+    ap.add_argument("--lcmtypes", required=True)
+    args = ap.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+    # multicast needs a route in the VM (only lo is up there)
+    subprocess.run(["ip", "route", "add", "239.0.0.0/8", "dev", "lo"],
+                   capture_output=True)
+    url = "udpm://239.255.76.67:7777?ttl=0&recv_buf_size=4194304"
+    capture = os.path.join(args.out, "daemon_can.candump")
+    dump = subprocess.Popen(["candump", "-L", "vcan0"], stdout=open(capture, "w"))
+    sim = subprocess.Popen([args.servo_sim, "--iface", "vcan0", "--start-deg",
+                            "-100,0,0", "--servo-error", "5", "--watchdog-ms",
+                            "500"], stderr=open(os.path.join(args.out, "sim.log"), "w"))
+    daemon_log = open(os.path.join(args.out, "qrtpland.log"), "w+")
+    daemon = subprocess.Popen([args.daemon, "--lcm-url", url, "--can", "vcan0",
+                               "--speed", "60", "--accel", "120"],
+                              stdout=daemon_log, stderr=subprocess.STDOUT)
+    lc = lcm.LCM(url)
+    joints, plans = [], []
+    lc.subscribe("QRT_JOINT_STATE", lambda c, d: joints.append(
+        cf.joint_state_t.decode(d)))
+    lc.subscribe("QRT_PLAN", lambda c, d: plans.append(cf.plan_t.decode(d)))
+
+    def pump(seconds, until=None):
+        end = time.time() + seconds
+        while time.time() < end:
+            lc.handle_timeout(10)
+            if until and until():
+                return True
+        return until() if until else True
+
+    scene, pts = cf.scene_points("table4_one_sphere.json")
+    arm = oracle.Arm(scene)
+    goal = [100.0, 0.0, 0.0]
+    t0 = time.time()
+    latencies = []
+    try:
+        ok = pump(15, lambda: joints and joints[-1].drive_state == "ready")
+        check(ok, f"the daemon brought the drives up ({time.time() - t0:.1f} s)")
+        clear = cf.scan_from_points(pts)
+        lc.publish("QRT_SCAN", clear.encode())
+        lc.publish("QRT_PLAN_REQUEST", cf.request(goal, request_id=1).encode())
+        moved = pump(10, lambda: any(j.moving for j in joints))
+        check(moved, "the arm moves along the plan")
+        first = next((p for p in plans if p.status == "ok"), None)
+        check(first is not None and abs(first.waypoints_deg[0][0] + 100) < 1,
+              "the plan starts at the joints the drives report")
+
+        # stop trials: block the rest of the path while the arm moves
+        tip = arm.joints(goal)[0]
+        wall = np.vstack([pts, tip[2:] + [0.0, 0.0, 0.0],
+                          0.5 * (tip[2] + tip[3])])
+        for trial in range(args.trials):
+            moving = pump(15, lambda: joints and joints[-1].moving)
+            if not moving:
+                # (re)start: a clear scan lets the daemon plan from here
+                lc.publish("QRT_SCAN", cf.scan_from_points(pts).encode())
+                moving = pump(15, lambda: joints and joints[-1].moving)
+            if not moving:
+                check(False, f"trial {trial}: the arm did not move")
+                break
+            pump(0.2)
+            n_plans = len(plans)
+            blocking = cf.scan_from_points(wall)
+            lc.publish("QRT_SCAN", blocking.encode())
+            sent = blocking.utime / 1e6
+            got = pump(5, lambda: any(p.executing_path_blocked
+                                      for p in plans[n_plans:]))
+            stopped = pump(5, lambda: joints and not joints[-1].moving and
+                           joints[-1].drive_state == "stopped")
+            if not (got and stopped):
+                check(False, f"trial {trial}: blocked {got}, stopped {stopped}")
+                continue
+            pump(0.3)
+            qs = quick_stops(capture)
+            after = qs[qs >= sent - 0.001]
+            if len(after):
+                latencies.append((after[0] - sent) * 1e3)
+            # recover: clear picture, the next plan executes
+            lc.publish("QRT_SCAN", cf.scan_from_points(pts).encode())
+        check(len(latencies) == args.trials,
+              f"{len(latencies)} of {args.trials} trials stopped the arm")
+        # finally to the goal
+        lc.publish("QRT_SCAN", cf.scan_from_points(pts).encode())
+        reached = pump(60, lambda: joints and not joints[-1].moving and
+                       max(abs(oracle.wrap180(joints[-1].joints_deg[0] - goal[0])),
+                           abs(joints[-1].joints_deg[1] - goal[1]),
+                           abs(joints[-1].joints_deg[2] - goal[2])) < 0.05)
+        if not reached:
+            for _ in range(20):  # keep scanning: every scan replans from here
+                lc.publish("QRT_SCAN", cf.scan_from_points(pts).encode())
+                if pump(3, lambda: joints and not joints[-1].moving and
+                        abs(oracle.wrap180(joints[-1].joints_deg[0] - goal[0])) < 0.05):
+                    reached = True
+                    break
+        check(reached, f"the arm reached the goal: {list(joints[-1].joints_deg) if joints else None}")
+    finally:
+        daemon.terminate()
+        try:
+            daemon.wait(15)
+        except subprocess.TimeoutExpired:
+            daemon.kill()
+        for p in (sim, dump):
+            p.terminate()
+            p.wait(10)
+    check(daemon.returncode == 0, f"clean shutdown (exit {daemon.returncode})")
+    q = np.array([j.joints_deg for j in joints])
+    c = oracle.clearances(arm, q, pts)
+    check(len(q) > 50 and float(c.min()) >= 0.0,
+          f"{len(q)} joint states published; every pose collision-free "
+          f"(min clearance {c.min():.4f} m)")
+    db = cantools.database.load_file(args.dbc)
+    bad = total = 0
+    with open(capture) as f:
+        for line in f:
+            parts = line.split()
+            if len(parts) >= 3 and "#" in parts[2]:
+                ident, data = parts[2].split("#", 1)
+                total += 1
+                try:
+                    db.decode_message(int(ident, 16), bytes.fromhex(data))
+                except Exception:  # noqa: BLE001
+                    bad += 1
+    check(total > 0 and bad == 0, f"capture: {total} frames, {bad} do not decode")
+    if latencies:
+        lat = np.array(latencies)
+        line = (f"scan that blocks the executing path -> quick-stop frame on "
+                f"the bus: {len(lat)} trials, median {np.median(lat):.1f} ms, "
+                f"p99 {np.percentile(lat, 99):.1f} ms, max {lat.max():.1f} ms")
+        print(line, flush=True)
+        with open(os.path.join(args.out, "stop_latency.txt"), "w") as f:
+            f.write(line + "\n")
+            f.write("\n".join(f"{v:.3f}" for v in lat) + "\n")
+    daemon_log.seek(0)
+    log = daemon_log.read()
+    check("blocked" in log, "the daemon logged the blocked path")
+    print(f"{len(failures)} failures, {time.time() - t0:.1f} s", flush=True)
+    if failures:
+        print(log[-3000:])
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

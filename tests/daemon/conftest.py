@@ -1,0 +1,158 @@
+"""Helpers for the qrtpland tests: a daemon on its own LCM port, a client
+built on the PyPI `lcm` package and the Python types lcm-gen made at build
+time (QRT_LCMTYPES_PY), and scans made from obstacle points."""
+import itertools
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(REPO, "tools"))
+sys.path.insert(0, os.environ.get("QRT_LCMTYPES_PY",
+                                  os.path.join(REPO, "build", "lcmtypes", "python")))
+import lcm  # noqa: E402
+from qrtplan import (daemon_status_t, joint_state_t, plan_request_t,  # noqa: E402
+                     plan_t, range_scan_t)
+
+DAEMON = os.environ.get("QRTPLAND_BIN", os.path.join(REPO, "build", "bin", "qrtpland"))
+_ports = itertools.count(7700 + (os.getpid() % 200) * 5)
+
+
+def now_us():
+    return int(time.time() * 1e6)
+
+
+def scan_from_points(points, sensor="s0", position=(0.0, 0.0, 0.0),
+                     orientation=(1.0, 0.0, 0.0, 0.0), max_range=5.0, utime=None):
+    """A range scan whose returns hit the given base-frame points, from a
+    sensor at `position` with identity orientation (or the given one, then
+    the points are taken in the sensor frame)."""
+    p = np.asarray(points, float).reshape(-1, 3) - np.asarray(position, float)
+    r = np.linalg.norm(p, axis=1)
+    msg = range_scan_t()
+    msg.utime = now_us() if utime is None else utime
+    msg.sensor_id = sensor
+    msg.position_m = list(position)
+    msg.orientation = list(orientation)
+    msg.max_range_m = max_range
+    msg.n = len(p)
+    msg.azimuth_rad = np.arctan2(p[:, 1], p[:, 0]).tolist()
+    msg.elevation_rad = np.arcsin(np.clip(p[:, 2] / np.maximum(r, 1e-12), -1, 1)).tolist()
+    msg.range_m = r.tolist()
+    return msg
+
+
+def request(goal, kind=0, start=None, request_id=1):
+    r = plan_request_t()
+    r.utime = now_us()
+    r.request_id = request_id
+    r.goal_kind = kind
+    r.goal = list(goal)
+    r.has_start = start is not None
+    r.start_deg = list(start) if start is not None else [0.0, 0.0, 0.0]
+    return r
+
+
+class Client:
+    """An LCM peer on the daemon's URL that collects what it publishes."""
+
+    def __init__(self, url):
+        self.lc = lcm.LCM(url)
+        self.plans, self.status = [], []
+        self.lc.subscribe("QRT_PLAN", lambda c, d: self.plans.append(
+            (time.time(), plan_t.decode(d))))
+        self.lc.subscribe("QRT_STATUS", lambda c, d: self.status.append(
+            daemon_status_t.decode(d)))
+
+    def publish(self, channel, msg):
+        self.lc.publish(channel, msg if isinstance(msg, bytes) else msg.encode())
+
+    def pump(self, seconds):
+        end = time.time() + seconds
+        while time.time() < end:
+            self.lc.handle_timeout(20)
+
+    def wait_plan(self, pred=lambda p: True, timeout=20.0, after=0):
+        end = time.time() + timeout
+        while time.time() < end:
+            for _, p in self.plans[after:]:
+                if pred(p):
+                    return p
+            self.lc.handle_timeout(50)
+        return None
+
+    def wait_status(self, pred, timeout=10.0):
+        end = time.time() + timeout
+        while time.time() < end:
+            if self.status and pred(self.status[-1]):
+                return self.status[-1]
+            self.lc.handle_timeout(50)
+        return self.status[-1] if self.status else None
+
+
+class Daemon:
+    def __init__(self, tmp_path, *args, url_options=""):
+        self.port = next(_ports)
+        self.url = f"udpm://239.255.76.67:{self.port}?ttl=0{url_options}"
+        self.log = open(tmp_path / f"qrtpland-{self.port}.log", "w+")
+        env = dict(os.environ)
+        if "ASAN_OPTIONS" in env:
+            # ASan keeps freed memory in quarantine (256 MiB): without it the
+            # flood test's RSS measures the daemon, not the sanitizer
+            env["ASAN_OPTIONS"] += ":quarantine_size_mb=0"
+        self.proc = subprocess.Popen([DAEMON, "--lcm-url", self.url, *args],
+                                     stdout=self.log, stderr=subprocess.STDOUT,
+                                     env=env)
+        time.sleep(0.3)
+        assert self.proc.poll() is None, self.text()
+
+    def text(self):
+        self.log.flush()
+        self.log.seek(0)
+        return self.log.read()
+
+    def rss_kib(self):
+        with open(f"/proc/{self.proc.pid}/status") as f:
+            for line in f:
+                if line.startswith("VmRSS:"):
+                    return int(line.split()[1])
+        return 0
+
+    def stop(self):
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            try:
+                return self.proc.wait(15)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                return None
+        return self.proc.returncode
+
+
+@pytest.fixture
+def daemon(tmp_path):
+    started = []
+
+    def start(*args, url_options=""):
+        d = Daemon(tmp_path, *args, url_options=url_options)
+        started.append(d)
+        c = Client(d.url)
+        # its first status comes after it has subscribed: from then on
+        # nothing published here is missed (slow starts under ASan)
+        assert c.wait_status(lambda s: True, timeout=30) is not None, d.text()
+        return d, c
+    yield start
+    for d in started:
+        d.stop()
+
+
+def scene_points(name):
+    with open(os.path.join(REPO, "scenes", name)) as f:
+        scene = json.load(f)
+    return scene, np.asarray(scene["points"], float)

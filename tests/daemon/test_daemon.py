@@ -1,0 +1,267 @@
+"""qrtpland over real LCM on loopback, each test on its own port."""
+import os
+import struct
+import time
+
+import numpy as np
+import oracle
+from conftest import (joint_state_t, now_us, plan_request_t, range_scan_t,
+                      request, scan_from_points, scene_points)
+
+
+def assert_safe(scene, plan, points):
+    """The independent oracle (tools/oracle.py) on a daemon's plan."""
+    as_json = {"status": plan.status,
+               "waypoints_deg": [list(w) for w in plan.waypoints_deg],
+               "cost_deg": plan.cost_deg}
+    res = oracle.check_path(scene, as_json, points)
+    assert res.safe, str(res)
+    return res
+
+
+def test_scan_and_request_give_a_safe_plan(daemon):
+    d, c = daemon()
+    scene, pts = scene_points("ten_spheres.json")
+    c.publish("QRT_SCAN", scan_from_points(pts, position=(0.0, 0.0, 0.5)))
+    c.publish("QRT_PLAN_REQUEST", request(scene["goal"]["joints_deg"],
+                                          start=scene["start"]["joints_deg"],
+                                          request_id=42))
+    p = c.wait_plan(lambda p: p.request_id == 42)
+    assert p is not None, d.text()
+    assert p.status == "ok", p.detail
+    assert p.points == len(pts)
+    assert list(p.waypoints_deg[0]) == scene["start"]["joints_deg"]
+    assert p.mask_us > 0 and p.total_us >= p.mask_us
+    res = assert_safe(scene, p, pts)
+    assert res.samples > 100
+
+
+def test_replans_on_every_scan_and_reports_a_blocked_path(daemon):
+    d, c = daemon()
+    scene, pts = scene_points("table4_one_sphere.json")
+    c.publish("QRT_SCAN", scan_from_points(pts))
+    c.publish("QRT_PLAN_REQUEST", request([100, 0, 0], start=[-100, 0, 0]))
+    first = c.wait_plan(lambda p: p.status == "ok")
+    assert first is not None, d.text()
+    n = len(c.plans)
+    # a wall across the executed path: points on the arm at its midpoint
+    wp = np.asarray(first.waypoints_deg)
+    mid = wp[len(wp) // 2]
+    tip = oracle.Arm(scene).joints(mid)[0]
+    wall = np.vstack([pts, tip[1:] + [0, 0, 0.0]])
+    c.publish("QRT_SCAN", scan_from_points(wall))
+    p = c.wait_plan(after=n)
+    assert p is not None, d.text()
+    assert p.executing_path_blocked, "the blocked path went unreported"
+    assert "blocked" in d.text()
+    # and the next scan, same obstacles: a fresh plan, not blocked
+    n = len(c.plans)
+    c.publish("QRT_SCAN", scan_from_points(wall))
+    p2 = c.wait_plan(after=n)
+    assert p2 is not None
+    assert not p2.executing_path_blocked or p2.status != "ok"
+
+
+def test_two_sensors_feed_one_picture(daemon):
+    d, c = daemon()
+    scene, pts = scene_points("three_spheres.json")
+    half = len(pts) // 2
+    c.publish("QRT_SCAN_A", scan_from_points(pts[:half], sensor="a"))
+    c.publish("QRT_SCAN_B", scan_from_points(pts[half:], sensor="b",
+                                             position=(0.2, -0.1, 0.3)))
+    time.sleep(0.2)
+    c.publish("QRT_PLAN_REQUEST", request(scene["goal"]["joints_deg"],
+                                          start=scene["start"]["joints_deg"]))
+    p = c.wait_plan(lambda p: p.points == len(pts))
+    assert p is not None, [q.points for _, q in c.plans]
+    assert p.status == "ok"
+    assert_safe(scene, p, pts)
+
+
+def test_start_from_the_joint_state(daemon):
+    d, c = daemon()
+    scene, pts = scene_points("three_spheres.json")
+    js = joint_state_t()
+    js.utime = now_us()
+    js.joints_deg = [-100.0, 0.0, 0.0]
+    js.moving = False
+    js.drive_state = "external"
+    c.publish("QRT_JOINT_STATE", js)
+    c.publish("QRT_SCAN", scan_from_points(pts))
+    time.sleep(0.1)
+    c.publish("QRT_PLAN_REQUEST", request([100, 0, 0]))
+    p = c.wait_plan(lambda p: p.status == "ok")
+    assert p is not None, d.text()
+    assert list(p.waypoints_deg[0]) == [-100.0, 0.0, 0.0]
+    assert_safe(scene, p, pts)
+
+
+def test_bad_messages_get_a_status_and_the_daemon_keeps_serving(daemon):
+    d, c = daemon()
+    good = scan_from_points([[0.5, 0.5, 0.5]])
+    raw = good.encode()
+    # wrong type fingerprint, truncated, a request on the scan channel
+    c.publish("QRT_SCAN", b"\x00" * 8 + raw[8:])
+    c.publish("QRT_SCAN", raw[: len(raw) // 2])
+    c.publish("QRT_SCAN", request([0, 0, 0]).encode())
+    # a count of returns far beyond the bytes (must not allocate it)
+    head = bytearray(raw)
+    n_at = 8 + 8 + 4 + len(b"s0") + 1 + 24 + 32 + 4
+    head[n_at:n_at + 4] = struct.pack(">i", 2**31 - 1)
+    c.publish("QRT_SCAN", bytes(head))
+    # NaN pose, non-unit quaternion, NaN ranges (kept scan, returns skipped)
+    bad = scan_from_points([[0.5, 0.5, 0.5]])
+    bad.position_m = [float("nan"), 0.0, 0.0]
+    c.publish("QRT_SCAN", bad)
+    q = scan_from_points([[0.5, 0.5, 0.5]])
+    q.orientation = [1.0, 1.0, 0.0, 0.0]
+    c.publish("QRT_SCAN", q)
+    r = scan_from_points([[0.6, 0.0, 0.1], [0.7, 0.0, 0.1]])
+    r.range_m = [float("nan"), float("inf")]
+    c.publish("QRT_SCAN", r)
+    c.publish("QRT_PLAN_REQUEST", b"garbage")
+    # what the fuzzer found: a string whose length field is INT_MIN made
+    # lcm-gen's decoder overflow and throw; and a sensor_id of length 0
+    js = joint_state_t()
+    js.drive_state = "x"
+    raw_js = bytearray(js.encode())
+    raw_js[41:45] = struct.pack(">i", -2**31)
+    c.publish("QRT_JOINT_STATE", bytes(raw_js))
+    zero = bytearray(raw)
+    zero[16:20] = struct.pack(">i", 0)
+    c.publish("QRT_SCAN", bytes(zero))
+    st = c.wait_status(lambda s: s.scans_rejected >= 7 and s.requests_rejected >= 1)
+    assert st is not None and st.scans_rejected >= 7, d.text()
+    assert st.requests_rejected >= 1
+    log = d.text()
+    for what in ("wrong type fingerprint", "claims 2147483647 returns",
+                 "non-finite", "not a unit quaternion", "joint state refused",
+                 "bad sensor_id length"):
+        assert what in log, what
+    # an unreachable goal and out-of-limit joints: statuses, not crashes
+    c.publish("QRT_PLAN_REQUEST", request([5.0, 0.0, 0.0], kind=1, start=[0, 0, 0],
+                                          request_id=7))
+    p = c.wait_plan(lambda p: p.request_id == 7)
+    assert p is not None and p.status == "unreachable", d.text()
+    c.publish("QRT_PLAN_REQUEST", request([0, 200, 0], start=[0, 0, 0], request_id=8))
+    p = c.wait_plan(lambda p: p.request_id == 8)
+    assert p is not None and p.status == "invalid_request"
+    c.publish("QRT_PLAN_REQUEST", request([float("nan"), 0, 0], start=[0, 0, 0],
+                                          request_id=9))
+    p = c.wait_plan(lambda p: p.request_id == 9)
+    assert p is not None and p.status == "invalid_request"
+    # still serving
+    c.publish("QRT_PLAN_REQUEST", request([90, 0, 0], start=[-90, 0, 0], request_id=10))
+    p = c.wait_plan(lambda p: p.request_id == 10)
+    assert p is not None and p.status == "ok"
+    assert d.proc.poll() is None
+
+
+def test_a_scan_beyond_capacity_says_what_was_dropped(daemon):
+    # 250,000 returns (3 MB: as much as one UDP multicast message gets
+    # through a 4 MiB receive buffer) filling the arm's whole reach: far more
+    # than the exact table (16,384). The core merges them into voxels
+    # (conservatively grown) and the plan says at which size; at 64 mm the
+    # whole reach fits the table, so in this build nothing is dropped, and a
+    # drop would have to say `capacity`.
+    d, c = daemon(url_options="&recv_buf_size=4194304")
+    rng = np.random.default_rng(5)
+    pts = rng.uniform(-1.0, 1.0, size=(250_000, 3)) * [1, 1, 0.6] + [0, 0, 0.3]
+    c.publish("QRT_SCAN", scan_from_points(pts, max_range=10.0))
+    time.sleep(0.5)
+    c.publish("QRT_PLAN_REQUEST", request([10, 0, 0], start=[0, 0, 0], request_id=3))
+    p = c.wait_plan(lambda p: p.request_id == 3, timeout=60)
+    assert p is not None, d.text()
+    st = c.wait_status(lambda s: s.plans_published >= 1)
+    assert st.points_in_picture == len(pts), f"{st.points_in_picture} arrived"
+    assert p.voxel_m > 0.0, "beyond 16,384 points the table must voxelise"
+    assert p.points < 16384 + 1
+    assert (p.points_dropped == 0) == (p.status != "capacity"), \
+        (p.status, p.points_dropped)
+    assert st.points_dropped == p.points_dropped
+
+
+def test_flood_keeps_memory_flat_and_the_daemon_answers(daemon):
+    d, c = daemon()
+    scene, pts = scene_points("ten_spheres.json")
+    c.publish("QRT_PLAN_REQUEST", request(scene["goal"]["joints_deg"],
+                                          start=scene["start"]["joints_deg"]))
+    msg = scan_from_points(pts).encode()
+    for _ in range(100):
+        c.publish("QRT_SCAN", msg)
+    c.pump(1.0)
+    rss0 = d.rss_kib()
+    for _ in range(1000):
+        c.publish("QRT_SCAN", msg)
+    c.pump(2.0)
+    rss1 = d.rss_kib()
+    st = c.wait_status(lambda s: s.scans_received >= 1000)
+    assert st is not None
+    assert st.scans_dropped > 0, "a flood must be dropped, not queued"
+    assert rss1 - rss0 < 20 * 1024, f"RSS grew {rss0} -> {rss1} KiB"
+    n = len(c.plans)
+    c.publish("QRT_PLAN_REQUEST", request([90, 0, 0], start=[-90, 0, 0], request_id=77))
+    p = c.wait_plan(lambda p: p.request_id == 77, after=n)
+    assert p is not None and p.status == "ok"
+
+
+def test_clean_shutdown_on_sigterm(daemon):
+    d, c = daemon()
+    c.publish("QRT_SCAN", scan_from_points([[0.5, 0.5, 0.5]]))
+    time.sleep(0.3)
+    assert d.stop() == 0
+    assert "shut down" in d.text()
+
+
+def test_help_and_bad_flags():
+    import subprocess
+    from conftest import DAEMON
+    r = subprocess.run([DAEMON, "--help"], capture_output=True, text=True)
+    assert r.returncode == 0 and "--lcm-url" in r.stdout and "--can" in r.stdout
+    r = subprocess.run([DAEMON, "--grid", "7x"], capture_output=True, text=True)
+    assert r.returncode == 2 and "grid" in r.stderr
+    r = subprocess.run([DAEMON, "--bogus", "1"], capture_output=True, text=True)
+    assert r.returncode == 2 and "unknown setting" in r.stderr
+
+
+def test_config_file_and_flags(daemon, tmp_path):
+    conf = tmp_path / "q.conf"
+    src = open(os.path.join(os.path.dirname(oracle.__file__), "..", "config",
+                            "qrtpland.conf")).read()
+    # the shipped example, with this test's own channels
+    conf.write_text(src.replace("QRT_PLAN_REQUEST", "MY_REQ")
+                    .replace("plan-channel = QRT_PLAN", "plan-channel = QRT_PLAN")
+                    + "\nlog-level = debug\n")
+    d, c = daemon("--config", str(conf))
+    scene, pts = scene_points("three_spheres.json")
+    c.publish("QRT_SCAN", scan_from_points(pts))
+    c.publish("MY_REQ", request(scene["goal"]["joints_deg"],
+                                start=scene["start"]["joints_deg"], request_id=5))
+    p = c.wait_plan(lambda p: p.request_id == 5)
+    assert p is not None and p.status == "ok", d.text()
+    bad = tmp_path / "bad.conf"
+    bad.write_text("grid = five\n")
+    import subprocess
+    from conftest import DAEMON
+    r = subprocess.run([DAEMON, "--config", str(bad)], capture_output=True, text=True)
+    assert r.returncode == 2 and "bad.conf:1" in r.stderr, r.stderr
+
+
+def test_replayed_log(daemon):
+    """A recording made with lcm-logger (tests/daemon/table4.lcmlog: the
+    Table 4 sphere as a scan, then a request) replayed by lcm-logplayer."""
+    import shutil
+    import subprocess
+    player = shutil.which("lcm-logplayer")
+    assert player, "lcm-logplayer (Debian liblcm-bin) is missing"
+    d, c = daemon()
+    log = os.path.join(os.path.dirname(__file__), "table4.lcmlog")
+    r = subprocess.run([player, f"--lcm-url={d.url}", log], capture_output=True,
+                       text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    p = c.wait_plan(lambda p: p.request_id == 4)
+    assert p is not None, d.text()
+    assert p.status == "ok"
+    scene, pts = scene_points("table4_one_sphere.json")
+    assert p.points == len(pts)
+    assert_safe(scene, p, pts)

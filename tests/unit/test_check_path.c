@@ -1,0 +1,99 @@
+/* qrt_planner_check_path: every path the planner returns checks free on
+ * the same mask; a point dropped onto the arm somewhere along a segment
+ * makes that segment (or an earlier one) blocked after the next build;
+ * bad input is refused. */
+#include "check.h"
+#include "qrtplan/qrtplan.h"
+
+static struct qrt_planner pl;
+static struct qrt_plan plan;
+
+int main(void)
+{
+    long trial, planned = 0, caught = 0;
+    test_seed(9191);
+    for (trial = 0; trial < test_count(60); trial++) {
+        struct qrt_params prm;
+        struct qrt_target s = {QRT_TARGET_JOINTS, {0, 0, 0}};
+        struct qrt_target g = {QRT_TARGET_JOINTS, {0, 0, 0}};
+        double cloud[3 * 40], q[3], p[4][3], t;
+        int i, k, seg, blocked;
+        for (i = 0; i < 40; i++) {
+            double a = test_uniform(-3.14159, 3.14159);
+            cloud[3 * i] = 0.6 * cos(a) + test_uniform(-0.05, 0.05);
+            cloud[3 * i + 1] = 0.6 * sin(a) + test_uniform(-0.05, 0.05);
+            cloud[3 * i + 2] = test_uniform(0.3, 0.5);
+        }
+        s.value[0] = test_uniform(-170, 170);
+        g.value[0] = test_uniform(-170, 170);
+        g.value[1] = test_uniform(-30, 60);
+        g.value[2] = test_uniform(-60, 60);
+        qrt_params_default(&prm);
+        qrt_planner_init(&pl, &prm);
+        qrt_planner_add_points(&pl, cloud, 40);
+        qrt_planner_build_mask(&pl);
+        if (qrt_planner_plan(&pl, &s, &g, &plan) != QRT_OK ||
+            plan.status != QRT_STATUS_OK || plan.n_waypoints < 2)
+            continue;
+        planned++;
+        CHECK(qrt_planner_check_path(&pl,
+                                     (const double(*)[3])plan.waypoints_deg,
+                                     plan.n_waypoints, &blocked) == QRT_OK,
+              "check refused a planned path");
+        CHECK(blocked == -1, "trial %ld: planned path blocked at %d", trial,
+              blocked);
+        /* a point on the forearm's middle, part way along one segment */
+        seg = (int)test_uniform(0, plan.n_waypoints - 1);
+        t = test_uniform(0.2, 0.8);
+        for (k = 0; k < 3; k++) {
+            double d =
+                plan.waypoints_deg[seg + 1][k] - plan.waypoints_deg[seg][k];
+            if (k == 0)
+                d = d > 180 ? d - 360 : d <= -180 ? d + 360 : d;
+            q[k] = plan.waypoints_deg[seg][k] + t * d;
+        }
+        if (q[0] > 180)
+            q[0] -= 360;
+        if (q[0] <= -180)
+            q[0] += 360;
+        qrt_arm_fk(&prm.arm, q, p);
+        {
+            double hit[3] = {0.5 * (p[2][0] + p[3][0]),
+                             0.5 * (p[2][1] + p[3][1]),
+                             0.5 * (p[2][2] + p[3][2])};
+            qrt_planner_add_points(&pl, hit, 1);
+        }
+        qrt_planner_build_mask(&pl);
+        CHECK(qrt_planner_check_path(&pl,
+                                     (const double(*)[3])plan.waypoints_deg,
+                                     plan.n_waypoints, &blocked) == QRT_OK,
+              "check refused");
+        CHECK(blocked >= 0 && blocked <= seg,
+              "trial %ld: a point on segment %d, check says %d", trial, seg,
+              blocked);
+        caught += blocked >= 0;
+    }
+    CHECK(planned >= test_count(60) / 2, "only %ld of the scenes planned",
+          planned);
+    printf("paths checked: %ld, obstacles on them caught: %ld\n", planned,
+           caught);
+    {
+        double bad[2][3] = {{0, 0, 0}, {0, 0, NAN}};
+        double out[2][3] = {{0, 0, 0}, {0, 200, 0}};
+        int blocked;
+        CHECK(qrt_planner_check_path(&pl, (const double(*)[3])bad, 2,
+                                     &blocked) == QRT_E_INVALID,
+              "NaN accepted");
+        CHECK(qrt_planner_check_path(&pl, (const double(*)[3])out, 2,
+                                     &blocked) == QRT_E_LIMITS,
+              "sigma 200 accepted");
+        CHECK(qrt_planner_check_path(&pl, (const double(*)[3])out, 0,
+                                     &blocked) == QRT_E_INVALID,
+              "n = 0 accepted");
+        qrt_planner_add_points(&pl, bad[0], 1);
+        CHECK(qrt_planner_check_path(&pl, (const double(*)[3])out, 1,
+                                     &blocked) == QRT_E_INVALID,
+              "a stale mask accepted");
+    }
+    return test_done("test_check_path");
+}
