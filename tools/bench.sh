@@ -36,3 +36,9 @@ if [ -x build/bin/qrtpland ] && [ -x build/bin/servo_sim ]; then
         --trials "${QRT_BENCH_STOP_TRIALS:-200}" --out "$out/stop_latency" |
         grep -E "quick-stop frame|failures" | tee -a "$out/table5.txt" || true
 fi
+
+# qrtplan against OMPL (issue 6): the same scenes, interleaved, oracle-checked
+if [ -x build/bin/bench_ompl ]; then
+    .venv/bin/python tools/bench_compare.py --repeats "${QRT_BENCH_OMPL_REPEATS:-5}" \
+        --out "$out" | tee "$out/ompl_summary.txt"
+fi

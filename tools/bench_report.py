@@ -72,7 +72,43 @@ def main(argv):
     fig.tight_layout()
     fig.savefig(out / "scaling.png", dpi=110)
     plt.close(fig)
-    print(f"plots: {out / 'table5_speedup.png'}, {out / 'scaling.png'}")
+    # the paper's C-space figures: T-space vs C-space points (Fig. 23), free
+    # nodes vs obstacles (Fig. 24), search time vs nodes (Figs. 25-26)
+    total_nodes = 72 * 45 * 65  # the 5 degree lattice
+    grid = [r for r in rows if r["paper_s"]]
+    fig, ax = plt.subplots(1, 3, figsize=(15, 4.5))
+    for k in (16, 100, 361, 1444):
+        sel = [r for r in grid if int(r["points_per_sphere"]) == k]
+        if not sel:
+            continue
+        pts = [int(r["points"]) for r in sel]
+        blocked = [int(r["cells_blocked"]) for r in sel]
+        ax[0].plot(pts, blocked, "-o", ms=3, label=f"{k} pts/sphere")
+        ax[1].plot([int(r["spheres"]) for r in sel],
+                   [total_nodes - b for b in blocked], "-o", ms=3,
+                   label=f"{k} pts/sphere")
+    ax[0].set_xscale("log")
+    ax[0].set_xlabel("T-space inspection points")
+    ax[0].set_ylabel("C-space blocked nodes (of 210,600)")
+    ax[0].set_title("T-space vs C-space points (paper Fig. 23)")
+    ax[1].set_xlabel("number of spheres")
+    ax[1].set_ylabel("free lattice nodes")
+    ax[1].set_title("Free nodes vs obstacles (paper Fig. 24)")
+    ax[2].scatter([int(r["nodes_expanded"]) for r in grid],
+                  [float(r["search_ms"]) for r in grid], s=10,
+                  c=[int(r["spheres"]) for r in grid], cmap="viridis")
+    ax[2].set_xlabel("nodes expanded by the search")
+    ax[2].set_ylabel("search + shortcut time (ms)")
+    ax[2].set_title("Search time vs nodes (paper Figs. 25-26)")
+    for a in ax[:2]:
+        a.legend(fontsize=7)
+    for a in ax:
+        a.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out / "scaling_cspace.png", dpi=110)
+    plt.close(fig)
+    print(f"plots: {out / 'table5_speedup.png'}, {out / 'scaling.png'}, "
+          f"{out / 'scaling_cspace.png'}")
 
 
 if __name__ == "__main__":

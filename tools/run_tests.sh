@@ -1,11 +1,15 @@
 #!/usr/bin/env bash
 # Every test of the project, as `make test` and CI run them:
-#   1. the release build's CTest suite (C unit tests + Python tests),
+#   1. the release build's CTest suite (C unit tests, Python tests, the
+#      daemon over LCM, the CAN tests on vcan0 in a VM),
 #   2. the same suite built with AddressSanitizer and UBSan,
 #   3. the core's C tests cross-built for armhf and aarch64, run under
 #      qemu-user, with the paper's scenes planned exactly as on the host,
-#   4. the core cross-built for a Cortex-M7,
-#   5. the libFuzzer target on the scene/PCD readers for a bounded time.
+#   4. the core cross-built for a Cortex-M7, and bare-metal Cortex-M7 images
+#      (ports/mps2-an500) running the core's tests and the Table 4 plan on
+#      qemu-system-arm, the plan compared with the host's bit for bit,
+#   5. the README's memory table checked against the built objects,
+#   6. the libFuzzer targets (scene/PCD readers, CAN frames, LCM messages).
 # Ends with one "N passed, M failed" line; exits non-zero on any failure.
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -62,6 +66,13 @@ if cmake -S . -B build-cortex-m7 $gen -DQRT_CORE_ONLY=ON \
     echo "cortex-m7 core: built"
 else
     tail -30 build-cortex-m7/build.log
+    failed=$((failed + 1))
+fi
+
+echo "== Cortex-M7 bare metal (qemu-system-arm -M mps2-an500): core tests, Table 4 plan"
+if ports/mps2-an500/run.sh build/bin/qrtplan; then
+    passed=$((passed + 1))
+else
     failed=$((failed + 1))
 fi
 

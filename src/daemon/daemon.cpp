@@ -93,6 +93,16 @@ void Daemon::on_scan(const lcm::ReceiveBuffer *rbuf, const std::string &channel)
         reject(channel + ": scan refused: " + why);
         return;
     }
+    if (sensors_seen_.count(p.msg.sensor_id) == 0) {
+        if (sensors_seen_.size() >= kMaxSensors) {
+            scans_rejected_++;
+            reject(channel + ": scan refused: sensor '" + p.msg.sensor_id +
+                   "' beyond the " + std::to_string(kMaxSensors) +
+                   " sensors already seen");
+            return;
+        }
+        sensors_seen_.insert(p.msg.sensor_id);
+    }
     scans_received_++;
     auto it = pending_scans_.find(p.msg.sensor_id);
     if (it != pending_scans_.end()) {
@@ -505,7 +515,8 @@ int Daemon::run(const std::atomic<bool> &stop)
     std::thread planner([&] { planner_loop(stop); });
     std::thread clock([&] { clock_loop(stop); });
     while (!stop)
-        if (lcm_.handleTimeout(100) < 0) {
+        // the stop signal itself interrupts the wait: that is no failure
+        if (lcm_.handleTimeout(100) < 0 && !stop) {
             log(LogLevel::error, "LCM receive failed; retrying");
             std::this_thread::sleep_for(std::chrono::milliseconds(100));
         }

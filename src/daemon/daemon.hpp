@@ -14,6 +14,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -72,6 +73,10 @@ class Daemon
     std::mutex mu_; // guards everything below
     std::condition_variable wake_;
     std::map<std::string, PendingScan> pending_scans_;
+    // every sensor ever accepted: the picture keeps one entry per sensor, so
+    // without a cap a stream of fresh sensor ids would grow it without bound
+    std::set<std::string> sensors_seen_;
+    static constexpr size_t kMaxSensors = 32;
     bool have_pending_request_ = false;
     qrtplan::plan_request_t pending_request_{};
     int64_t request_received_us_ = 0;

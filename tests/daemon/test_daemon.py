@@ -205,12 +205,36 @@ def test_flood_keeps_memory_flat_and_the_daemon_answers(daemon):
     assert p is not None and p.status == "ok"
 
 
+def test_fresh_sensor_ids_cannot_grow_the_picture(daemon):
+    # one picture entry per sensor: a stream of new sensor ids is refused
+    # past the cap instead of growing memory
+    d, c = daemon()
+    c.pump(0.5)
+    rss0 = d.rss_kib()
+    # 1,100 sent, 1,000 awaited: loopback UDP may lose a few in a burst
+    for i in range(1100):
+        c.publish("QRT_SCAN", scan_from_points([[0.5, 0.5, 0.5]] * 200,
+                                               sensor=f"x{i}"))
+    st = c.wait_status(lambda s: s.scans_received + s.scans_rejected >= 1000)
+    assert st is not None, d.text()
+    assert st.scans_received == 32 and st.scans_rejected >= 1000 - 32, (
+        st.scans_received, st.scans_rejected)
+    assert "beyond the 32 sensors" in st.last_error
+    assert "beyond the 32 sensors" in d.text()
+    assert d.rss_kib() - rss0 < 20 * 1024
+    c.publish("QRT_PLAN_REQUEST", request([90, 0, 0], start=[-90, 0, 0], request_id=5))
+    p = c.wait_plan(lambda p: p.request_id == 5)
+    assert p is not None and p.status == "ok" and p.points == 32 * 200, d.text()
+
+
 def test_clean_shutdown_on_sigterm(daemon):
     d, c = daemon()
     c.publish("QRT_SCAN", scan_from_points([[0.5, 0.5, 0.5]]))
     time.sleep(0.3)
     assert d.stop() == 0
     assert "shut down" in d.text()
+    # the signal interrupts LCM's wait; that must not read as a failure
+    assert "qrtpland: error" not in d.text(), d.text()
 
 
 def test_help_and_bad_flags():

@@ -1,0 +1,182 @@
+#!/usr/bin/env python3
+"""qrtplan against OMPL (RRTConnect, PRM, RRT*) on the same scenes.
+
+Makes the scenes (the paper's Eq. 13 family with `qrtplan gen`; confined
+scenes, a tunnel, a shelf and dense random clutter with tools/scenes.py),
+runs build/bin/bench_ompl on them (the two sides interleaved repetition by
+repetition in one process), checks every returned path with the independent
+oracle (tools/oracle.py, 0.1 degree sampling), and writes
+build/bench/ompl_compare.csv, ompl_summary.csv and ompl_compare.png.
+
+    .venv/bin/python tools/bench_compare.py [--repeats R] [--seeds N]
+    .venv/bin/python tools/bench_compare.py --smoke      # a few seconds, for make test
+"""
+import argparse
+import csv
+import json
+import os
+import subprocess
+import sys
+from collections import defaultdict
+
+import numpy as np
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(REPO, "tools"))
+import oracle  # noqa: E402
+import scenes  # noqa: E402
+
+PLANNERS = ["qrtplan", "RRTConnect", "PRM", "RRTstar"]
+
+
+def make_scenes(out, seeds, qrtplan, smoke):
+    os.makedirs(out, exist_ok=True)
+    made = []  # (family, path)
+    paper = [(1, 16), (3, 361)] if smoke else [(1, 1444), (3, 1444), (10, 1444)]
+    for n, k in paper:
+        path = os.path.join(out, f"paper_{n}x{k}.json")
+        args = [qrtplan, "gen", "--spheres", str(n), "--points", str(k), "-o", path]
+        if n > 1:  # the Table 5 layout (tools/bench_table5.c's scene_for)
+            args += ["--phase", str(90 - 180 / n), "--start",
+                     f"{90 - 360 * (n // 2) / n},0,0", "--goal", "90,0,0"]
+        subprocess.run(args, check=True)
+        made.append(("paper Eq. 13", path))
+    families = {"confined box": "box", "tunnel": "tunnel", "shelf": "shelf",
+                "clutter": "spheres"}
+    for label, fam in families.items():
+        for seed in range(1 if smoke else seeds):
+            sc = scenes.make_scene(fam, 1000 + seed)
+            if label == "clutter":  # dense: five times the random spheres
+                more = [scenes.make_scene(fam, 5000 + 7 * seed + i)["points"]
+                        for i in range(4)]
+                sc["points"] = sc["points"] + sum(more, [])
+            path = os.path.join(out, f"{fam}_{seed}.json")
+            with open(path, "w") as f:
+                json.dump(sc, f)
+            made.append((label, path))
+            if smoke:
+                break
+        if smoke:
+            break
+    return made
+
+
+def check_oracle(scene_path, waypoints, cache={}):
+    if scene_path not in cache:
+        with open(scene_path) as f:
+            sc = json.load(f)
+        cache[scene_path] = (sc, oracle.scene_points(sc, os.path.dirname(scene_path)))
+    sc, pts = cache[scene_path]
+    arm = oracle.Arm(sc)
+    q = oracle.sample_path(arm, waypoints)
+    c = oracle.clearances(arm, q, pts)
+    inside = all(lo - 1e-9 <= v <= hi + 1e-9 for j, (lo, hi) in enumerate(arm.limits)
+                 if not (j == 0 and arm.alpha_wraps) for v in q[:, j])
+    return bool(c.min() >= 0.0 and inside)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--time-limit", type=float, default=5.0)
+    ap.add_argument("--smoke", action="store_true")
+    ap.add_argument("--bench-ompl", default=os.path.join(REPO, "build", "bin", "bench_ompl"))
+    ap.add_argument("--qrtplan", default=None)
+    ap.add_argument("--out", default=os.path.join(REPO, "build", "bench"))
+    args = ap.parse_args()
+    qrtplan = args.qrtplan or os.path.join(os.path.dirname(args.bench_ompl), "qrtplan")
+    if args.smoke:
+        args.repeats, args.time_limit = 1, 2.0
+    made = make_scenes(os.path.join(args.out, "ompl_scenes"), args.seeds, qrtplan,
+                       args.smoke)
+    family_of = {p: fam for fam, p in made}
+    raw = os.path.join(args.out, "ompl_compare.csv")
+    subprocess.run([args.bench_ompl, "--repeats", str(args.repeats), "--time-limit",
+                    str(args.time_limit), "--csv", raw] + [p for _, p in made],
+                   check=True)
+    rows = list(csv.DictReader(open(raw)))
+    assert rows, "bench_ompl wrote no rows"
+    stats = defaultdict(lambda: {"time": [], "len": [], "ok": 0, "n": 0, "safe": 0})
+    problems = []
+    for r in rows:
+        assert r["planner"] in PLANNERS, r["planner"]
+        key = (family_of[r["scene"]], r["planner"])
+        s = stats[key]
+        s["n"] += 1
+        if r["success"] != "1":
+            continue
+        wps = json.loads(r["path"])
+        assert len(wps) == int(r["waypoints"]) >= 1, r
+        safe = check_oracle(r["scene"], wps) if len(wps) >= 2 else True
+        s["ok"] += 1
+        s["safe"] += safe
+        s["time"].append(float(r["time_ms"]))
+        s["len"].append(float(r["length_deg"]))
+        if r["planner"] == "qrtplan" and not safe:
+            problems.append(f"qrtplan path on {r['scene']} fails the oracle")
+    fams = list(dict.fromkeys(f for f, _ in made))
+    summary = os.path.join(args.out, "ompl_summary.csv")
+    lines = []
+    with open(summary, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["family", "planner", "runs", "success_rate", "median_ms",
+                    "median_length_deg", "oracle_pass_rate"])
+        for fam in fams:
+            for pl in PLANNERS:
+                s = stats.get((fam, pl))
+                if not s or s["n"] == 0:
+                    continue
+                med = float(np.median(s["time"])) if s["time"] else float("nan")
+                ln = float(np.median(s["len"])) if s["len"] else float("nan")
+                w.writerow([fam, pl, s["n"], s["ok"] / s["n"], med, ln,
+                            s["safe"] / s["ok"] if s["ok"] else float("nan")])
+                lines.append((fam, pl, s["n"], s["ok"] / s["n"], med, ln,
+                              s["safe"] / s["ok"] if s["ok"] else float("nan")))
+    print(f"{'family':14} {'planner':11} {'runs':>4} {'success':>8} {'median ms':>10} "
+          f"{'length deg':>10} {'oracle ok':>9}")
+    for fam, pl, n, succ, med, ln, safe in lines:
+        print(f"{fam:14} {pl:11} {n:4d} {succ:8.0%} {med:10.2f} {ln:10.1f} {safe:9.0%}")
+    for fam in fams:
+        ours = stats.get((fam, "qrtplan"))
+        rrt = stats.get((fam, "RRTConnect"))
+        if ours and rrt and ours["time"] and rrt["time"]:
+            print(f"{fam}: qrtplan {np.median(rrt['time']) / np.median(ours['time']):.1f}x "
+                  f"faster than RRTConnect in median time to a path; median length "
+                  f"{np.median(ours['len']):.0f} vs {np.median(rrt['len']):.0f} deg")
+    if not args.smoke:
+        plot(lines, fams, os.path.join(args.out, "ompl_compare.png"))
+    for p in problems:
+        print("FAIL", p)
+    return 1 if problems else 0
+
+
+def plot(lines, fams, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(1, 2, figsize=(12, 4.5))
+    width = 0.2
+    x = np.arange(len(fams))
+    for i, pl in enumerate(PLANNERS):
+        t = [next((m for f, p, _, _, m, _, _ in lines if f == fam and p == pl), np.nan)
+             for fam in fams]
+        ln = [next((l for f, p, _, _, _, l, _ in lines if f == fam and p == pl), np.nan)
+              for fam in fams]
+        ax[0].bar(x + (i - 1.5) * width, t, width, label=pl)
+        ax[1].bar(x + (i - 1.5) * width, ln, width, label=pl)
+    ax[0].set_yscale("log")
+    ax[0].set_ylabel("median time to a path, ms (log)")
+    ax[1].set_ylabel("median joint-space path length, degrees")
+    for a in ax:
+        a.set_xticks(x, fams, rotation=15)
+        a.legend(fontsize=8)
+        a.grid(axis="y", alpha=0.3)
+    ax[0].set_title("time to first path (RRT*: 1 s budget)")
+    ax[1].set_title("path length")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
