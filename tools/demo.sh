@@ -43,4 +43,6 @@ for i in range(max(len(ours), len(paper))):
     print(f"  {i + 1:>2}  {o:>30}   {q:>30}")
 PY
 echo
-echo "Plans, masks and pictures: $out/ (*_cspace.png, *_arm.png)"
+tools/demo_can.sh
+echo
+echo "Plans, masks and pictures: $out/ (*_cspace.png, *_arm.png; can_trace.png with vcan0)"

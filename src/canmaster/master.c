@@ -306,8 +306,25 @@ int qrtcan_master_set_path(struct qrtcan_master *m, const double (*wp)[3],
     return QRTCAN_OK;
 }
 
-/* Profile velocity/acceleration of joint j for the segment deltas d so that
- * every joint's trapezoid has the same shape and duration. */
+/* Slowest profile a joint gets, in degrees per second (squared): a joint
+ * whose share of a segment is tiny would otherwise crawl (at 1 count/s a
+ * drive needs seconds to settle its last counts). Leading by that little
+ * bounds the detour from the straight segment by the joint's own step,
+ * at most FLOOR_SPEED_DEG_S times the segment's duration. */
+#define FLOOR_SPEED_DEG_S 0.02
+#define FLOOR_ACCEL_DEG_S2 0.04
+
+static uint32_t counts_rate(double deg_rate, double counts_per_deg,
+                            double floor_deg)
+{
+    double v = (deg_rate > floor_deg ? deg_rate : floor_deg) * counts_per_deg;
+    return v < 1.0 ? 1u : v > 4e9 ? 4000000000u : (uint32_t)(v + 0.5);
+}
+
+/* Profile velocity/acceleration of each joint for the segment deltas d so
+ * that every joint's trapezoid has the same shape and duration; a joint
+ * that does not move gets its full profile (it has nothing to keep pace
+ * with). */
 static void segment_profile(const struct qrtcan_master *m, const double d[3],
                             uint32_t vel[3], uint32_t acc[3])
 {
@@ -323,9 +340,13 @@ static void segment_profile(const struct qrtcan_master *m, const double d[3],
     }
     for (j = 0; j < QRTCAN_JOINTS; j++) {
         double c = fabs(m->cfg.scale[j].counts_per_deg);
-        double v = fabs(d[j]) * speed * c, a = fabs(d[j]) * accel * c;
-        vel[j] = v < 1.0 ? 1u : v > 4e9 ? 4000000000u : (uint32_t)(v + 0.5);
-        acc[j] = a < 1.0 ? 1u : a > 4e9 ? 4000000000u : (uint32_t)(a + 0.5);
+        int still = fabs(d[j]) < 1e-9;
+        vel[j] =
+            counts_rate(still ? m->cfg.max_speed_deg_s[j] : fabs(d[j]) * speed,
+                        c, FLOOR_SPEED_DEG_S);
+        acc[j] =
+            counts_rate(still ? m->cfg.max_accel_deg_s2[j] : fabs(d[j]) * accel,
+                        c, FLOOR_ACCEL_DEG_S2);
     }
 }
 

@@ -213,6 +213,24 @@ int main(void)
     printf("path 1: worst distance from the planned segments %.4f deg\n",
            worst_off_line);
 
+    /* a joint that does not move must not hold the segment up: the drives
+     * settle at target + servo error, and a crawling profile would take
+     * seconds over those last counts */
+    {
+        static const double still_eta[2][3] = {{-10, 35, 5}, {10, 45, 5}};
+        uint64_t t0;
+        /* eta exactly on its target (as after power-up): its step is 0 */
+        drives[2].pos = 5000.0;
+        for (i = 0; i < 40; i++)
+            step();
+        t0 = clock_us;
+        CHECK(follow(still_eta, still_eta, 2, 20.0), "segment with eta still");
+        CHECK(clock_us - t0 < 2500000, "a 20 degree segment took %.2f s",
+              (double)(clock_us - t0) * 1e-6);
+        static const double back[2][3] = {{10, 45, 5}, {-10, 35, 5}};
+        CHECK(follow(back, back, 2, 20.0), "and back");
+    }
+
     /* alpha across +-180 the short way: the drive goes 170 -> 190 */
     CHECK(follow(path2, path2, 2, 20.0), "path 2 not completed");
     worst_off_line = 0.0;
