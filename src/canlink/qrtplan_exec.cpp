@@ -42,6 +42,7 @@ const char *kUsage =
     "  --counts-per-deg X   drive counts per joint degree, all joints (1000)\n"
     "  --speed DEG_S        top joint speed (30); --accel DEG_S2 (60)\n"
     "  --timeout S          give up after S seconds (120)\n"
+    "  --heartbeat-timeout MS  a drive silent this long is lost (300)\n"
     "  --trace FILE         CSV of time and joint positions read back\n"
     "  --where              bring the drives up, print their joints as\n"
     "                       [alpha, sigma, eta] degrees and exit (to plan\n"
@@ -156,6 +157,10 @@ int main(int argc, char **argv)
             for (int j = 0; j < 3; j++)
                 (a == "--speed" ? cfg.max_speed_deg_s
                                 : cfg.max_accel_deg_s2)[j] = v;
+        } else if (a == "--heartbeat-timeout") {
+            if (!parse_double(value(a.c_str()), &v) || v < 20 || v > 60000)
+                return fail_input("--heartbeat-timeout wants 20..60000 ms");
+            cfg.heartbeat_timeout_us = uint32_t(v * 1000.0);
         } else if (a == "--timeout") {
             if (!parse_double(value("--timeout"), &timeout_s) || timeout_s <= 0)
                 return fail_input("--timeout wants positive seconds");

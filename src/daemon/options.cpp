@@ -44,6 +44,7 @@ const char *kUsage =
     "  --counts-per-deg X       drive counts per degree (1000)\n"
     "  --speed DEG_S            top joint speed (30)\n"
     "  --accel DEG_S2           joint acceleration (60)\n"
+    "  --heartbeat-timeout MS   a drive silent this long is lost (300)\n"
     "  --log-level LEVEL        error, warn, info or debug (info)\n"
     "  --config FILE            read settings from FILE first\n"
     "  --help, --version\n"
@@ -139,6 +140,10 @@ bool apply(Options *o, const std::string &key, const std::string &value,
         for (int j = 0; j < 3; j++)
             (key == "speed" ? o->can.max_speed_deg_s
                             : o->can.max_accel_deg_s2)[j] = v;
+    } else if (key == "heartbeat-timeout") {
+        if (!number(20, 60000))
+            return bad("milliseconds in 20..60000");
+        o->can.heartbeat_timeout_us = uint32_t(v * 1000.0);
     } else if (key == "log-level") {
         if (value != "error" && value != "warn" && value != "info" &&
             value != "debug")
