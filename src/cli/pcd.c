@@ -303,7 +303,7 @@ int pcd_parse(const char *buf, size_t len, double **xyz_out, long *n_out,
               char *err, size_t err_len)
 {
     struct pcd_header h;
-    struct xyz_layout L;
+    struct xyz_layout L = {{0}, {0}, 0, 0, {0}};
     size_t pos = 0;
     double *xyz;
     long n;
