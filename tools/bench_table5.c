@@ -105,10 +105,10 @@ static void scene_for(int n, struct sphere_layout *L, double start[3],
  * callgrind's --toggle-collect, which must name one function that is
  * entered once per plan (the qrt_planner_* calls nest, and nested matches
  * would toggle the count off again). */
-__attribute__((noinline)) void plan_end_to_end(
-    const struct qrt_params *prm, const double *xyz, long count,
-    const struct qrt_target *s, const struct qrt_target *g,
-    struct qrt_plan *plan, double *t0, double *t1, double *t2)
+__attribute__((noinline)) void
+plan_end_to_end(const struct qrt_params *prm, const double *xyz, long count,
+                const struct qrt_target *s, const struct qrt_target *g,
+                struct qrt_plan *plan, double *t0, double *t1, double *t2)
 {
     *t0 = now_s();
     qrt_planner_init(&pl, prm);

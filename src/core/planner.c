@@ -80,7 +80,7 @@ int qrt_planner_add_points(struct qrt_planner *pl, const double *xyz, long n)
 /* Edge of the cubes that group points for the raster: larger groups share
  * more work, but their bounding balls are less often already covered. */
 #ifndef CLUSTER_CELL_M
-#define CLUSTER_CELL_M 0.03
+#define CLUSTER_CELL_M 0.04
 #endif
 
 struct cluster_ctx {

@@ -18,6 +18,10 @@
 #include "fastmath.h"
 #include "geom.h"
 
+/* Open spans up to this many nodes are decided node by node by
+ * sector_hits rather than by each member's eta range. */
+#define SECTOR_SPAN_MAX 4
+
 /* radians added to every angular result: covers rounding and the fast
  * atan2's error (twice: a centre and a half-width each carry it) */
 #define ANG_EPS (2.0 * QRT_FAST_ANGLE_ERR + 1e-9)
@@ -169,6 +173,19 @@ void qrt_raster_setup(struct qrt_raster *r, struct qrt_mask *mask,
     for (w = 0; w < QRT_ROW_WORDS; w++)
         r->full_row[w] = 0;
     set_row_range(r->full_row, 0, lat->n[2] - 1);
+    /* edges of link 3's sector on each psi node j = is + ie; the sector
+     * test needs it to span less than half a turn */
+    r->sector_ok = 4.0 * r->h < QRT_PI - 1e-6;
+    for (j = 0; j + 1 < lat->n[1] + lat->n[2]; j++) {
+        double psi = r->lo[1] + r->lo[2] + j * r->g;
+        r->sector_edge[j][0] = (float)cos(psi - 2.0 * r->h);
+        r->sector_edge[j][1] = (float)sin(psi - 2.0 * r->h);
+        r->sector_edge[j][2] = (float)cos(psi + 2.0 * r->h);
+        r->sector_edge[j][3] = (float)sin(psi + 2.0 * r->h);
+    }
+    /* a float edge direction is off by < 1e-7 rad, which moves no point of
+     * the link by more than this */
+    r->sector_eps = 2e-7 * (arm->link_m[2] + 1.0) + 1e-9;
 }
 
 void qrt_raster_begin(struct qrt_raster *r, struct qrt_mask *mask,
@@ -335,16 +352,60 @@ static void mark_ranges(uint64_t *row, int ranges[3][2], int n)
         set_row_range(row, ranges[i][0], ranges[i][1]);
 }
 
-static int ranges_blocked(const uint64_t *row, int ranges[3][2], int n)
+static int bit_set(const uint64_t *row, int i)
 {
-    uint64_t want[QRT_ROW_WORDS] = {0};
-    int i, w;
+    return (int)((row[i >> 6] >> (i & 63)) & 1U);
+}
+
+/* Does link 3 on row is, with psi anywhere in node ie's range psi_j +- 2h
+ * (j = is + ie), come within pl->reach3 of the disc centre? The question
+ * link3_row_ranges answers for a whole row with approximate angles, asked
+ * exactly of one node: the sector the link sweeps from the elbow (radius
+ * L3, between the two edge directions) against the disc. */
+static int sector_hits(const struct qrt_raster *r, int is, int ie,
+                       const struct plane *pl)
+{
+    const double len = r->arm->link_m[2];
+    const float *edge = r->sector_edge[is + ie];
+    double wu = pl->cu - r->elbow[is][0], wz = pl->z - r->elbow[is][1];
+    double reach = pl->reach3 + r->sector_eps, d2 = wu * wu + wz * wz;
+    double far = len + reach;
+    int k;
+    if (d2 > far * far)
+        return 0;
+    if (d2 <= reach * reach)
+        return 1;
+    /* between the edges (the sector spans less than half a turn) */
+    if ((double)edge[0] * wz - (double)edge[1] * wu >= 0.0 &&
+        wu * (double)edge[3] - wz * (double)edge[2] >= 0.0)
+        return 1;
+    for (k = 0; k < 2; k++) { /* else the nearer edge segment decides */
+        double eu = edge[2 * k], ez = edge[2 * k + 1];
+        double t = wu * eu + wz * ez, du, dz;
+        t = t < 0.0 ? 0.0 : (t > len ? len : t);
+        du = wu - t * eu;
+        dz = wz - t * ez;
+        if (du * du + dz * dz <= reach * reach)
+            return 1;
+    }
+    return 0;
+}
+
+/* The nodes of the ranges not marked yet: their hull [*a, *b]; returns
+ * whether there are any. */
+static int open_nodes(const uint64_t *row, int ranges[3][2], int n, int *a,
+                      int *b)
+{
+    int i, ie;
+    *a = QRT_MAX_NE;
+    *b = -1;
     for (i = 0; i < n; i++)
-        set_row_range(want, ranges[i][0], ranges[i][1]);
-    for (w = 0; w < QRT_ROW_WORDS; w++)
-        if ((row[w] & want[w]) != want[w])
-            return 0;
-    return 1;
+        for (ie = ranges[i][0]; ie <= ranges[i][1]; ie++)
+            if (!bit_set(row, ie)) {
+                *a = ie < *a ? ie : *a;
+                *b = ie > *b ? ie : *b;
+            }
+    return *b >= 0;
 }
 
 /* Links 2 and 3 of one point for the cell boxes of alpha node ia. */
@@ -496,15 +557,29 @@ void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
             for (k = 0; k < nrows; k++)
                 for (is = rows[k][0]; is <= rows[k][1]; is++) {
                     uint64_t *row = r->mask->rows[ia][is];
-                    int cr[3][2], nc;
+                    int cr[3][2], nc, a, b;
                     if (full[is])
                         continue;
                     nc = link3_row_ranges(r, is, &cpl, cr);
-                    if (nc == 0 || ranges_blocked(row, cr, nc))
+                    if (nc == 0)
+                        continue;
+                    if (!open_nodes(row, cr, nc, &a, &b))
                         continue;
                     if (!planes_ready) {
                         member_planes(r, ia, mp, mrho, m, mpl);
                         planes_ready = 1;
+                    }
+                    if (r->sector_ok && b - a < SECTOR_SPAN_MAX) {
+                        /* a few nodes at the edge of what is blocked: no
+                         * member can truly block one outside the ball's
+                         * range, so only these are asked of each member */
+                        int ie;
+                        for (j = 0; j < m; j++)
+                            for (ie = a; mpl[j].hit3 && ie <= b; ie++)
+                                if (!bit_set(row, ie) &&
+                                    sector_hits(r, is, ie, &mpl[j]))
+                                    row[ie >> 6] |= 1ULL << (ie & 63);
+                        continue;
                     }
                     for (j = 0; j < m; j++) {
                         int mr[3][2], nm;

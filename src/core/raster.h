@@ -31,6 +31,11 @@ struct qrt_raster {
     /* this raster writes only alpha nodes ia with ia % nparts == part, so
      * that parts can run at once on different cores */
     int part, nparts;
+    /* link 3's sector on each psi node (sigma + eta): cos, sin of its
+     * lower and upper edge; sector_eps covers their float rounding */
+    float sector_edge[QRT_MAX_NS + QRT_MAX_NE - 1][4];
+    double sector_eps;
+    int sector_ok;
 };
 
 /* Prepare to raster: clears the mask. radius_m: per-link collision radius
