@@ -222,6 +222,13 @@ def main():
             daemon.wait(15)
         except subprocess.TimeoutExpired:
             daemon.kill()
+        # the daemon's last frames are on the bus when it exits, but the
+        # canopen notifier thread may not have handed them to the drives
+        # yet: give it time before the bus is closed (seen on a busy host)
+        settle = time.time() + 5.0
+        while time.time() < settle and not all(d.state == "quick_stop"
+                                                for d in drives):
+            time.sleep(0.05)
         stop.set()
         network.disconnect()
     check(daemon.returncode == 0, f"clean shutdown (exit {daemon.returncode})")
