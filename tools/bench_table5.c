@@ -160,10 +160,62 @@ static void run_cell(int n, int k, int repeats, struct cell *c)
     free(times);
 }
 
+/* A replan's first question, "is the path being executed still free?",
+ * asked of a new 10 x 1444 cloud two ways, alternating: by
+ * qrt_planner_check_path_now (only the rows the path passes through) and
+ * by building the whole mask and then qrt_planner_check_path. */
+static void check_now_vs_mask(int repeats)
+{
+    struct sphere_layout L;
+    struct qrt_params prm;
+    struct qrt_target s = {QRT_TARGET_JOINTS, {0, 0, 0}};
+    struct qrt_target g = {QRT_TARGET_JOINTS, {0, 0, 0}};
+    static struct qrt_plan plan;
+    double now_ms[15], full_ms[15], *xyz;
+    long count;
+    int r, rep = repeats < 15 ? repeats : 15, blocked_now = 0, blocked_full = 0;
+    scene_for(10, &L, s.value, g.value);
+    L.points = 1444;
+    count = sphere_layout_count(&L);
+    xyz = malloc((size_t)count * 3 * sizeof *xyz);
+    if (!xyz)
+        return;
+    sphere_layout_points(&L, xyz);
+    qrt_params_default(&prm);
+    qrt_planner_init(&pl, &prm);
+    qrt_planner_add_points(&pl, xyz, count);
+    qrt_planner_build_mask(&pl);
+    qrt_planner_plan(&pl, &s, &g, &plan);
+    for (r = 0; r < rep && plan.status == QRT_STATUS_OK; r++) {
+        double t0, t1, t2;
+        const double(*wp)[3] = (const double(*)[3])plan.waypoints_deg;
+        qrt_planner_clear_points(&pl); /* a new scan of the same scene */
+        qrt_planner_add_points(&pl, xyz, count);
+        t0 = now_s();
+        qrt_planner_check_path_now(&pl, wp, plan.n_waypoints, &blocked_now);
+        t1 = now_s();
+        build_mask();
+        qrt_planner_check_path(&pl, wp, plan.n_waypoints, &blocked_full);
+        t2 = now_s();
+        now_ms[r] = (t1 - t0) * 1e3;
+        full_ms[r] = (t2 - t1) * 1e3;
+    }
+    free(xyz);
+    if (plan.status != QRT_STATUS_OK || rep < 1)
+        return;
+    qsort(now_ms, (size_t)rep, sizeof *now_ms, cmp_double);
+    qsort(full_ms, (size_t)rep, sizeof *full_ms, cmp_double);
+    printf("10 x 1444, is the %d-waypoint path still free? "
+           "check_path_now %.2f ms, whole mask + check_path %.2f ms (%.1fx); "
+           "answers %d and %d; %d runs each\n",
+           plan.n_waypoints, now_ms[rep / 2], full_ms[rep / 2],
+           full_ms[rep / 2] / now_ms[rep / 2], blocked_now, blocked_full, rep);
+}
+
 int main(int argc, char **argv)
 {
     static const long big[3] = {10000, 100000, 1000000};
-    int repeats = 15, i, n, k, single_n = 0, single_k = 0;
+    int repeats = 15, i, n, k, single_n = 0, single_k = 0, check_only = 0;
     const char *csv_path = NULL;
     FILE *csv = NULL;
     struct cell c;
@@ -177,17 +229,23 @@ int main(int argc, char **argv)
         else if (strcmp(argv[i], "--single") == 0 && i + 2 < argc) {
             single_n = atoi(argv[++i]);
             single_k = atoi(argv[++i]);
+        } else if (strcmp(argv[i], "--check-path") == 0) {
+            check_only = 1;
         } else if (strcmp(argv[i], "--threads") == 0 && i + 1 < argc) {
             mask_threads = atoi(argv[++i]);
         } else {
             fprintf(stderr, "usage: bench_table5 [--repeats R] [--quick] "
                             "[--csv FILE] [--single SPHERES POINTS] "
-                            "[--threads 1|2]\n");
+                            "[--threads 1|2] [--check-path]\n");
             return 2;
         }
     }
     if (repeats < 1)
         repeats = 1;
+    if (check_only) {
+        check_now_vs_mask(repeats);
+        return 0;
+    }
     if (single_n > 0) {
         run_cell(single_n, single_k, repeats, &c);
         printf("%d x %d: %s, median %.3f ms, convert %.3f ms, search %.3f ms\n",
@@ -265,6 +323,7 @@ int main(int argc, char **argv)
                " median %.2f ms vs %.2f ms on one (%.2fx), %d runs each\n",
                two[rep / 2], one[rep / 2], one[rep / 2] / two[rep / 2], rep);
     }
+    check_now_vs_mask(repeats);
     if (csv)
         fclose(csv);
     return 0;

@@ -26,6 +26,10 @@ struct qrt_lattice {
     double lo_deg[3]; /* joint value of node 0 on each axis */
 };
 
+/* 64-bit words of a set of mask rows (alpha, sigma): bit
+ * ia * QRT_MAX_NS + is. */
+#define QRT_ROW_SET_WORDS ((QRT_MAX_NA * QRT_MAX_NS + 63) / 64)
+
 struct qrt_mask {
     struct qrt_lattice lat;
     /* bit ie of row (ia, is) set = node blocked */

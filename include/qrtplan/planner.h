@@ -79,6 +79,8 @@ struct qrt_planner {
     double radius_m[3]; /* per-link collision radius the mask was built for */
     long cells_blocked;
     int mask_stale; /* points changed since the mask was built */
+    /* the mask rows qrt_planner_check_path_now builds */
+    uint64_t check_rows[QRT_ROW_SET_WORDS];
     /* search scratch, one entry per lattice node; while a mask is built,
      * heap_pos and cluster_scratch are the clustering scratch of parts 0
      * and 1 */
@@ -126,11 +128,23 @@ int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
  * path being executed)? *first_blocked is the index of the first segment
  * (waypoint i to i+1) that cannot be proved free, or -1 if every segment is
  * (same certificate as the planner's own motions: the mask walk, else
- * conservative advancement against the points). QRT_E_INVALID for a stale
+ * conservative advancement against the points); 0 when points were lost
+ * to capacity, since then nothing can be proved. QRT_E_INVALID for a stale
  * mask, n < 1 or NaN/Inf; QRT_E_LIMITS for a waypoint outside the limits. */
 int qrt_planner_check_path(const struct qrt_planner *pl,
                            const double (*waypoints_deg)[3], int n,
                            int *first_blocked);
+
+/* The same question asked of the points now in the table, before any mask
+ * is built for them: builds only the mask rows the path's motions pass
+ * through (a few percent of the mask for a typical path) and answers with
+ * the same certificate, so a replan can stop the arm long before the whole
+ * mask is ready. The mask is left partial: qrt_planner_plan and
+ * qrt_planner_check_path refuse it (QRT_E_INVALID) until the next
+ * qrt_planner_build_mask. Same return codes as qrt_planner_check_path. */
+int qrt_planner_check_path_now(struct qrt_planner *pl,
+                               const double (*waypoints_deg)[3], int n,
+                               int *first_blocked);
 
 #ifdef __cplusplus
 }

@@ -15,12 +15,11 @@ void qrt_motion_delta(const struct qrt_lattice *lat, const double a_deg[3],
         d_deg[0] = qrt_wrap_deg(d_deg[0]);
 }
 
-/* Is the cell whose node is nearest to continuous lattice coordinates x
- * free? Outside the lattice counts as blocked. */
-static int cell_free(const struct qrt_mask *mask, const double x[3])
+/* The lattice node whose cell holds continuous lattice coordinates x;
+ * 0 if that is outside the lattice. */
+static int cell_of(const struct qrt_lattice *lat, const double x[3], int ijk[3])
 {
-    const struct qrt_lattice *lat = &mask->lat;
-    int ijk[3], j;
+    int j;
     for (j = 0; j < 3; j++) {
         double k = floor(x[j] + 0.5);
         if (j == 0 && lat->alpha_wraps)
@@ -29,11 +28,16 @@ static int cell_free(const struct qrt_mask *mask, const double x[3])
             return 0;
         ijk[j] = (int)k;
     }
-    return !qrt_mask_blocked(mask, ijk);
+    return 1;
 }
 
-int qrt_motion_free_on_mask(const struct qrt_mask *mask, const double a_deg[3],
-                            const double b_deg[3])
+/* Walk the motion a -> b cell by cell. Without rows: 1 if every cell is
+ * free (outside the lattice counts as blocked). With rows: mark in it the
+ * mask row (alpha, sigma) of every cell the walk would test, and return 1.
+ * One walk for both, so a check on rows built from the marks looks at
+ * exactly the rows that were built. */
+static int walk(const struct qrt_mask *mask, const double a_deg[3],
+                const double b_deg[3], uint64_t *rows)
 {
     const struct qrt_lattice *lat = &mask->lat;
     double x0[3], dx[3], d[3], next_t[3], step_t[3], t = 0.0;
@@ -60,7 +64,7 @@ int qrt_motion_free_on_mask(const struct qrt_mask *mask, const double a_deg[3],
     }
     for (;;) {
         double t_end = 1.0, mid[3];
-        int axis = -1;
+        int axis = -1, ijk[3], inside;
         for (j = 0; j < 3; j++)
             if (next_t[j] < t_end) {
                 t_end = next_t[j];
@@ -68,8 +72,15 @@ int qrt_motion_free_on_mask(const struct qrt_mask *mask, const double a_deg[3],
             }
         for (j = 0; j < 3; j++)
             mid[j] = x0[j] + 0.5 * (t + t_end) * dx[j];
-        if (!cell_free(mask, mid))
+        inside = cell_of(lat, mid, ijk);
+        if (rows) {
+            if (inside) {
+                long bit = (long)ijk[0] * QRT_MAX_NS + ijk[1];
+                rows[bit >> 6] |= 1ULL << (bit & 63);
+            }
+        } else if (!inside || qrt_mask_blocked(mask, ijk)) {
             return 0;
+        }
         if (axis < 0)
             return 1;
         t = t_end;
@@ -77,25 +88,56 @@ int qrt_motion_free_on_mask(const struct qrt_mask *mask, const double a_deg[3],
     }
 }
 
-double qrt_clearance(const struct qrt_arm *arm, const double radius_m[3],
-                     const struct qrt_points *pts, const double q_deg[3])
+int qrt_motion_free_on_mask(const struct qrt_mask *mask, const double a_deg[3],
+                            const double b_deg[3])
 {
-    double p[4][3], best = 1e30;
+    return walk(mask, a_deg, b_deg, 0);
+}
+
+void qrt_motion_mark_rows(const struct qrt_mask *mask, const double a_deg[3],
+                          const double b_deg[3], uint64_t *rows)
+{
+    (void)walk(mask, a_deg, b_deg, rows);
+}
+
+double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],
+                            const struct qrt_points *pts, const double q_deg[3],
+                            double cap)
+{
+    double p[4][3], lo[3][3], hi[3][3], best = cap;
     long i;
-    int k;
+    int k, j;
     qrt_arm_fk(arm, q_deg, p);
+    for (k = 0; k < 3; k++)
+        for (j = 0; j < 3; j++) {
+            lo[k][j] = p[k][j] < p[k + 1][j] ? p[k][j] : p[k + 1][j];
+            hi[k][j] = p[k][j] > p[k + 1][j] ? p[k][j] : p[k + 1][j];
+        }
     for (i = 0; i < pts->count; i++) {
         double x[3];
         x[0] = pts->xyz[i][0];
         x[1] = pts->xyz[i][1];
         x[2] = pts->xyz[i][2];
         for (k = 0; k < 3; k++) {
-            double c = sqrt(qrt_seg_dist2(x, p[k], p[k + 1])) - radius_m[k];
+            /* a point farther than best + radius from the link's box on
+             * some axis cannot lower best: skip the segment distance */
+            double reach = best + radius_m[k], c;
+            if (x[0] < lo[k][0] - reach || x[0] > hi[k][0] + reach ||
+                x[1] < lo[k][1] - reach || x[1] > hi[k][1] + reach ||
+                x[2] < lo[k][2] - reach || x[2] > hi[k][2] + reach)
+                continue;
+            c = sqrt(qrt_seg_dist2(x, p[k], p[k + 1])) - radius_m[k];
             if (c < best)
                 best = c;
         }
     }
     return best;
+}
+
+double qrt_clearance(const struct qrt_arm *arm, const double radius_m[3],
+                     const struct qrt_points *pts, const double q_deg[3])
+{
+    return qrt_clearance_capped(arm, radius_m, pts, q_deg, 1e30);
 }
 
 int qrt_motion_free_exact(const struct qrt_arm *arm, const double radius_m[3],
@@ -116,7 +158,10 @@ int qrt_motion_free_exact(const struct qrt_arm *arm, const double radius_m[3],
         double q[3], c;
         for (j = 0; j < 3; j++)
             q[j] = a_deg[j] + t * d[j];
-        c = qrt_clearance(arm, radius_m, pts, q);
+        /* clearance beyond what carries the arm to b is never needed: a
+         * lower bound is as good as the value for the step */
+        c = qrt_clearance_capped(arm, radius_m, pts, q,
+                                 speed * (1.0 - t) * 1.01 + 1e-6);
         if (c <= 1e-7)
             return 0;
         if (speed <= 0.0)

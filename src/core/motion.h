@@ -2,6 +2,8 @@
 #ifndef QRT_CORE_MOTION_H
 #define QRT_CORE_MOTION_H
 
+#include <stdint.h>
+
 #include "qrtplan/arm.h"
 #include "qrtplan/lattice.h"
 #include "qrtplan/points.h"
@@ -16,10 +18,21 @@ void qrt_motion_delta(const struct qrt_lattice *lat, const double a_deg[3],
 int qrt_motion_free_on_mask(const struct qrt_mask *mask, const double a_deg[3],
                             const double b_deg[3]);
 
+/* Mark in rows (bit ia * QRT_MAX_NS + is) every mask row that
+ * qrt_motion_free_on_mask(mask, a, b) looks at. */
+void qrt_motion_mark_rows(const struct qrt_mask *mask, const double a_deg[3],
+                          const double b_deg[3], uint64_t *rows);
+
 /* Smallest clearance (distance minus collision radius, metres) between the
  * arm at q_deg and the points; a large value when there are none. */
 double qrt_clearance(const struct qrt_arm *arm, const double radius_m[3],
                      const struct qrt_points *pts, const double q_deg[3]);
+
+/* min(clearance, cap): the same where the clearance is below cap, and
+ * cheaper, since points farther than cap from the arm are skipped. */
+double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],
+                            const struct qrt_points *pts, const double q_deg[3],
+                            double cap);
 
 /* 1 if the motion a -> b is proved free against the points themselves by
  * conservative advancement (each step shorter than the clearance divided by

@@ -94,7 +94,8 @@ static void raster_cluster(void *ctx, const int32_t *members, int m)
     qrt_raster_cluster(c->raster, c->pts, members, m);
 }
 
-int qrt_planner_build_mask_begin(struct qrt_planner *pl)
+/* Collision radii for the points now in the table, and an empty mask. */
+static void start_mask(struct qrt_planner *pl)
 {
     double inflation = qrt_points_inflation_m(&pl->points);
     int k, ia, is, w;
@@ -105,19 +106,26 @@ int qrt_planner_build_mask_begin(struct qrt_planner *pl)
         for (is = 0; is < QRT_MAX_NS; is++)
             for (w = 0; w < QRT_ROW_WORDS; w++)
                 pl->mask.rows[ia][is][w] = 0;
-    pl->mask_stale = 1; /* until the parts are done and _end is called */
+    pl->mask_stale = 1; /* until the whole mask is built */
+}
+
+int qrt_planner_build_mask_begin(struct qrt_planner *pl)
+{
+    start_mask(pl);
     return QRT_OK;
 }
 
-int qrt_planner_build_mask_part(struct qrt_planner *pl, int part, int nparts)
+/* Raster part `part` of `nparts` (rows: NULL, or only those rows). */
+static void raster_part(struct qrt_planner *pl, int part, int nparts,
+                        const uint64_t *rows)
 {
     struct qrt_raster r;
     int32_t *scratch;
     long i;
-    if (nparts < 1 || nparts > QRT_MAX_MASK_PARTS || part < 0 || part >= nparts)
-        return QRT_E_INVALID;
     qrt_raster_setup(&r, &pl->mask, &pl->params.arm, pl->radius_m,
                      pl->params.cspace_margin_deg, part, nparts);
+    if (rows)
+        qrt_raster_only_rows(&r, rows);
     /* the search's node arrays are idle until the next search: each part
      * lends its own for the clustering */
     scratch = part == 0 ? pl->heap_pos : pl->search.cluster_scratch;
@@ -136,6 +144,13 @@ int qrt_planner_build_mask_part(struct qrt_planner *pl, int part, int nparts)
             qrt_raster_point(&r, p);
         }
     }
+}
+
+int qrt_planner_build_mask_part(struct qrt_planner *pl, int part, int nparts)
+{
+    if (nparts < 1 || nparts > QRT_MAX_MASK_PARTS || part < 0 || part >= nparts)
+        return QRT_E_INVALID;
+    raster_part(pl, part, nparts, 0);
     return QRT_OK;
 }
 
@@ -510,14 +525,13 @@ int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
     return QRT_OK;
 }
 
-int qrt_planner_check_path(const struct qrt_planner *pl,
-                           const double (*waypoints_deg)[3], int n,
-                           int *first_blocked)
+/* Waypoints finite and within the limits? QRT_OK, QRT_E_INVALID or
+ * QRT_E_LIMITS. */
+static int check_waypoints(const struct qrt_planner *pl,
+                           const double (*waypoints_deg)[3], int n)
 {
-    double radius[3];
     int i, j;
-    *first_blocked = -1;
-    if (pl->mask_stale || n < 1)
+    if (n < 1)
         return QRT_E_INVALID;
     for (i = 0; i < n; i++) {
         for (j = 0; j < 3; j++)
@@ -526,15 +540,63 @@ int qrt_planner_check_path(const struct qrt_planner *pl,
         if (qrt_arm_check_joints(&pl->params.arm, waypoints_deg[i]) != QRT_OK)
             return QRT_E_LIMITS;
     }
+    return QRT_OK;
+}
+
+/* The first segment not proved free on the mask (every row the walk looks
+ * at must be built) nor against the points, or -1. */
+static int first_blocked_segment(const struct qrt_planner *pl,
+                                 const double (*waypoints_deg)[3], int n)
+{
+    double radius[3];
+    int i;
     exact_radii(pl, radius);
     for (i = 0; i + 1 < n; i++)
         if (!qrt_motion_free_on_mask(&pl->mask, waypoints_deg[i],
                                      waypoints_deg[i + 1]) &&
             !qrt_motion_free_exact(&pl->params.arm, radius, &pl->points,
                                    &pl->mask.lat, waypoints_deg[i],
-                                   waypoints_deg[i + 1], EXACT_MAX_STEPS)) {
-            *first_blocked = i;
-            return QRT_OK;
-        }
+                                   waypoints_deg[i + 1], EXACT_MAX_STEPS))
+            return i;
+    return -1;
+}
+
+int qrt_planner_check_path(const struct qrt_planner *pl,
+                           const double (*waypoints_deg)[3], int n,
+                           int *first_blocked)
+{
+    int rc;
+    *first_blocked = -1;
+    if (pl->mask_stale)
+        return QRT_E_INVALID;
+    rc = check_waypoints(pl, waypoints_deg, n);
+    if (rc != QRT_OK)
+        return rc;
+    /* a cloud that lost points to capacity proves nothing free */
+    *first_blocked = pl->points.dropped > 0
+                         ? 0
+                         : first_blocked_segment(pl, waypoints_deg, n);
+    return QRT_OK;
+}
+
+int qrt_planner_check_path_now(struct qrt_planner *pl,
+                               const double (*waypoints_deg)[3], int n,
+                               int *first_blocked)
+{
+    int rc, i, w;
+    *first_blocked = -1;
+    rc = check_waypoints(pl, waypoints_deg, n);
+    if (rc != QRT_OK)
+        return rc;
+    for (w = 0; w < QRT_ROW_SET_WORDS; w++)
+        pl->check_rows[w] = 0;
+    for (i = 0; i + 1 < n; i++)
+        qrt_motion_mark_rows(&pl->mask, waypoints_deg[i], waypoints_deg[i + 1],
+                             pl->check_rows);
+    start_mask(pl); /* the mask is partial, hence stale, from here on */
+    raster_part(pl, 0, 1, pl->check_rows);
+    *first_blocked = pl->points.dropped > 0
+                         ? 0
+                         : first_blocked_segment(pl, waypoints_deg, n);
     return QRT_OK;
 }

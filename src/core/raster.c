@@ -121,7 +121,15 @@ static int angle_ranges(const struct qrt_axis *ax, double centre, double half,
 /* Is alpha node ia this raster's to write? */
 static int owns(const struct qrt_raster *r, int ia)
 {
-    return r->nparts <= 1 || ia % r->nparts == r->part;
+    return (r->nparts <= 1 || ia % r->nparts == r->part) &&
+           (!r->only_rows || r->alpha_wanted[ia]);
+}
+
+/* Is row (ia, is) one this raster must get right? */
+static int wanted(const struct qrt_raster *r, int ia, int is)
+{
+    long bit = (long)ia * QRT_MAX_NS + is;
+    return !r->only_rows || ((r->only_rows[bit >> 6] >> (bit & 63)) & 1U);
 }
 
 static void block_alpha(const struct qrt_raster *r, int ia)
@@ -142,6 +150,7 @@ void qrt_raster_setup(struct qrt_raster *r, struct qrt_mask *mask,
     int a, s, w, j;
     r->part = part;
     r->nparts = nparts;
+    r->only_rows = 0;
     r->arm = arm;
     r->mask = mask;
     r->g = lat->grid_deg * QRT_DEG;
@@ -201,18 +210,18 @@ void qrt_raster_begin(struct qrt_raster *r, struct qrt_mask *mask,
 }
 
 /* Link 1 depends on alpha only: a hit blocks whole alpha slabs. */
-static void raster_link1(const struct qrt_raster *r, double rho, double phi,
-                         double z)
+static void raster_link1(const struct qrt_raster *r, double rho,
+                         const double p[3])
 {
     double rad = r->radius_m[0], reach, w;
     int ranges[3][2], n, i, ia;
-    if (fabs(z) >= rad)
+    if (fabs(p[2]) >= rad) /* most points: no atan2 needed */
         return;
-    reach = sqrt(rad * rad - z * z) + 1e-12;
+    reach = sqrt(rad * rad - p[2] * p[2]) + 1e-12;
     w = sweep_half_width(rho, r->arm->link_m[0], reach);
     if (w < 0.0)
         return;
-    n = angle_ranges(&r->axis[0], phi, w + r->h, ranges);
+    n = angle_ranges(&r->axis[0], atan2(p[1], p[0]), w + r->h, ranges);
     for (i = 0; i < n; i++)
         for (ia = ranges[i][0]; ia <= ranges[i][1]; ia++)
             block_alpha(r, ia);
@@ -308,7 +317,7 @@ static int rows_full(const struct qrt_raster *r, int ia, int ranges[3][2],
     int i, is, w;
     for (i = 0; i < n; i++)
         for (is = ranges[i][0]; is <= ranges[i][1]; is++)
-            for (w = 0; w < QRT_ROW_WORDS; w++)
+            for (w = 0; w < QRT_ROW_WORDS && wanted(r, ia, is); w++)
                 if ((r->mask->rows[ia][is][w] & r->full_row[w]) !=
                     r->full_row[w])
                     return 0;
@@ -422,7 +431,7 @@ static void raster_plane(const struct qrt_raster *r, int ia, double rho,
     for (k = 0; k < nrows; k++)
         for (is = rows[k][0]; is <= rows[k][1]; is++) {
             int ranges[3][2], n;
-            if (full[is])
+            if (full[is] || !wanted(r, ia, is))
                 continue;
             n = link3_row_ranges(r, is, &pl, ranges);
             mark_ranges(r->mask->rows[ia][is], ranges, n);
@@ -469,7 +478,7 @@ void qrt_raster_point(const struct qrt_raster *r, const double p[3])
 {
     double rho = sqrt(p[0] * p[0] + p[1] * p[1]);
     double phi = atan2(p[1], p[0]);
-    raster_link1(r, rho, phi, p[2]);
+    raster_link1(r, rho, p);
     raster_planes(r, p, rho, phi);
 }
 
@@ -519,7 +528,7 @@ void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
             hi[k] = mp[j][k] > hi[k] ? mp[j][k] : hi[k];
         }
         mrho[j] = sqrt(mp[j][0] * mp[j][0] + mp[j][1] * mp[j][1]);
-        raster_link1(r, mrho[j], atan2(mp[j][1], mp[j][0]), mp[j][2]);
+        raster_link1(r, mrho[j], mp[j]);
     }
     if (m == 1) {
         raster_planes(r, mp[0], mrho[0], atan2(mp[0][1], mp[0][0]));
@@ -558,7 +567,7 @@ void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
                 for (is = rows[k][0]; is <= rows[k][1]; is++) {
                     uint64_t *row = r->mask->rows[ia][is];
                     int cr[3][2], nc, a, b;
-                    if (full[is])
+                    if (full[is] || !wanted(r, ia, is))
                         continue;
                     nc = link3_row_ranges(r, is, &cpl, cr);
                     if (nc == 0)
@@ -590,4 +599,16 @@ void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
                     }
                 }
         }
+}
+
+void qrt_raster_only_rows(struct qrt_raster *r, const uint64_t *rows)
+{
+    int ia, is;
+    r->only_rows = rows;
+    for (ia = 0; ia < r->mask->lat.n[0]; ia++) {
+        r->alpha_wanted[ia] = 0;
+        for (is = 0; is < r->mask->lat.n[1]; is++)
+            if (wanted(r, ia, is))
+                r->alpha_wanted[ia] = 1;
+    }
 }

@@ -34,6 +34,10 @@ struct qrt_raster {
     /* link 3's sector on each psi node (sigma + eta): cos, sin of its
      * lower and upper edge; sector_eps covers their float rounding */
     float sector_edge[QRT_MAX_NS + QRT_MAX_NE - 1][4];
+    /* NULL, or the only rows to raster (bit ia * QRT_MAX_NS + is); other
+     * rows may be left partly written */
+    const uint64_t *only_rows;
+    unsigned char alpha_wanted[QRT_MAX_NA]; /* with only_rows: any row */
     double sector_eps;
     int sector_ok;
 };
@@ -53,6 +57,11 @@ void qrt_raster_begin(struct qrt_raster *r, struct qrt_mask *mask,
 void qrt_raster_setup(struct qrt_raster *r, struct qrt_mask *mask,
                       const struct qrt_arm *arm, const double radius_m[3],
                       double cspace_margin_deg, int part, int nparts);
+
+/* Raster from now on only the rows in rows (bit ia * QRT_MAX_NS + is),
+ * which must stay valid while this raster is used: the others are not
+ * computed, and may be left partly written. */
+void qrt_raster_only_rows(struct qrt_raster *r, const uint64_t *rows);
 
 /* Mark every node whose cell box holds a configuration that collides with
  * point p (metres). */

@@ -1,7 +1,10 @@
 /* qrt_planner_check_path: every path the planner returns checks free on
  * the same mask; a point dropped onto the arm somewhere along a segment
  * makes that segment (or an earlier one) blocked after the next build;
- * bad input is refused. */
+ * bad input is refused. qrt_planner_check_path_now, which builds only the
+ * rows the path passes through: never free where the whole mask is not,
+ * catches the same point before any build, agrees with the whole mask on
+ * (nearly) every path, and leaves a mask the planner refuses. */
 #include "check.h"
 #include "qrtplan/qrtplan.h"
 
@@ -10,14 +13,15 @@ static struct qrt_plan plan;
 
 int main(void)
 {
-    long trial, planned = 0, caught = 0;
+    long trial, planned = 0, caught = 0, agree = 0;
+    static struct qrt_plan plan2;
     test_seed(9191);
     for (trial = 0; trial < test_count(60); trial++) {
         struct qrt_params prm;
         struct qrt_target s = {QRT_TARGET_JOINTS, {0, 0, 0}};
         struct qrt_target g = {QRT_TARGET_JOINTS, {0, 0, 0}};
         double cloud[3 * 40], q[3], p[4][3], t;
-        int i, k, seg, blocked;
+        int i, k, seg, blocked, now;
         for (i = 0; i < 40; i++) {
             double a = test_uniform(-3.14159, 3.14159);
             cloud[3 * i] = 0.6 * cos(a) + test_uniform(-0.05, 0.05);
@@ -36,6 +40,14 @@ int main(void)
             plan.status != QRT_STATUS_OK || plan.n_waypoints < 2)
             continue;
         planned++;
+        CHECK(qrt_planner_check_path_now(&pl,
+                                         (const double(*)[3])plan.waypoints_deg,
+                                         plan.n_waypoints, &now) == QRT_OK,
+              "check_path_now refused a planned path");
+        agree += now == -1;
+        CHECK(qrt_planner_plan(&pl, &s, &g, &plan2) == QRT_E_INVALID,
+              "planned on the partial mask check_path_now leaves");
+        qrt_planner_build_mask(&pl);
         CHECK(qrt_planner_check_path(&pl,
                                      (const double(*)[3])plan.waypoints_deg,
                                      plan.n_waypoints, &blocked) == QRT_OK,
@@ -63,6 +75,13 @@ int main(void)
                              0.5 * (p[2][2] + p[3][2])};
             qrt_planner_add_points(&pl, hit, 1);
         }
+        CHECK(qrt_planner_check_path_now(&pl,
+                                         (const double(*)[3])plan.waypoints_deg,
+                                         plan.n_waypoints, &now) == QRT_OK,
+              "check_path_now refused");
+        CHECK(now >= 0 && now <= seg,
+              "trial %ld: a point on segment %d, check_path_now says %d", trial,
+              seg, now);
         qrt_planner_build_mask(&pl);
         CHECK(qrt_planner_check_path(&pl,
                                      (const double(*)[3])plan.waypoints_deg,
@@ -71,12 +90,20 @@ int main(void)
         CHECK(blocked >= 0 && blocked <= seg,
               "trial %ld: a point on segment %d, check says %d", trial, seg,
               blocked);
+        /* the partial build blocks at least what the whole one does */
+        CHECK(blocked < 0 || now <= blocked,
+              "trial %ld: check_path_now free up to %d, the mask blocks %d",
+              trial, now, blocked);
         caught += blocked >= 0;
     }
     CHECK(planned >= test_count(60) / 2, "only %ld of the scenes planned",
           planned);
-    printf("paths checked: %ld, obstacles on them caught: %ld\n", planned,
-           caught);
+    printf("paths checked: %ld, obstacles on them caught: %ld; "
+           "check_path_now free on %ld of the planned paths\n",
+           planned, caught, agree);
+    CHECK(agree * 100 >= planned * 95,
+          "check_path_now proved only %ld of %ld planned paths free", agree,
+          planned);
     {
         double bad[2][3] = {{0, 0, 0}, {0, 0, NAN}};
         double out[2][3] = {{0, 0, 0}, {0, 200, 0}};
@@ -90,6 +117,12 @@ int main(void)
         CHECK(qrt_planner_check_path(&pl, (const double(*)[3])out, 0,
                                      &blocked) == QRT_E_INVALID,
               "n = 0 accepted");
+        CHECK(qrt_planner_check_path_now(&pl, (const double(*)[3])bad, 2,
+                                         &blocked) == QRT_E_INVALID,
+              "check_path_now accepted NaN");
+        CHECK(qrt_planner_check_path_now(&pl, (const double(*)[3])out, 2,
+                                         &blocked) == QRT_E_LIMITS,
+              "check_path_now accepted sigma 200");
         qrt_planner_add_points(&pl, bad[0], 1);
         CHECK(qrt_planner_check_path(&pl, (const double(*)[3])out, 1,
                                      &blocked) == QRT_E_INVALID,
