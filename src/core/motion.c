@@ -2,6 +2,7 @@
 #include "motion.h"
 
 #include <math.h>
+#include <stddef.h>
 
 #include "geom.h"
 
@@ -91,7 +92,7 @@ static int walk(const struct qrt_mask *mask, const double a_deg[3],
 int qrt_motion_free_on_mask(const struct qrt_mask *mask, const double a_deg[3],
                             const double b_deg[3])
 {
-    return walk(mask, a_deg, b_deg, 0);
+    return walk(mask, a_deg, b_deg, NULL);
 }
 
 void qrt_motion_mark_rows(const struct qrt_mask *mask, const double a_deg[3],

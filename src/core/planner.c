@@ -3,6 +3,7 @@
 #include "qrtplan/planner.h"
 
 #include <math.h>
+#include <stddef.h>
 
 #include "cluster.h"
 #include "geom.h"
@@ -150,7 +151,7 @@ int qrt_planner_build_mask_part(struct qrt_planner *pl, int part, int nparts)
 {
     if (nparts < 1 || nparts > QRT_MAX_MASK_PARTS || part < 0 || part >= nparts)
         return QRT_E_INVALID;
-    raster_part(pl, part, nparts, 0);
+    raster_part(pl, part, nparts, NULL);
     return QRT_OK;
 }
 

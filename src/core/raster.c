@@ -14,6 +14,7 @@
 #include "raster.h"
 
 #include <math.h>
+#include <stddef.h>
 
 #include "fastmath.h"
 #include "geom.h"
@@ -150,7 +151,7 @@ void qrt_raster_setup(struct qrt_raster *r, struct qrt_mask *mask,
     int a, s, w, j;
     r->part = part;
     r->nparts = nparts;
-    r->only_rows = 0;
+    r->only_rows = NULL;
     r->arm = arm;
     r->mask = mask;
     r->g = lat->grid_deg * QRT_DEG;
@@ -175,25 +176,25 @@ void qrt_raster_setup(struct qrt_raster *r, struct qrt_mask *mask,
         r->axis[j].wraps = j == 0 && lat->alpha_wraps;
     }
     for (s = 0; s < lat->n[1]; s++) {
-        r->sigma[s] = r->lo[1] + s * r->g;
-        r->elbow[s][0] = arm->link_m[1] * cos(r->sigma[s]);
-        r->elbow[s][1] = arm->link_m[1] * sin(r->sigma[s]);
+        double sigma = r->lo[1] + s * r->g;
+        r->elbow[s][0] = arm->link_m[1] * cos(sigma);
+        r->elbow[s][1] = arm->link_m[1] * sin(sigma);
     }
     for (w = 0; w < QRT_ROW_WORDS; w++)
         r->full_row[w] = 0;
     set_row_range(r->full_row, 0, lat->n[2] - 1);
-    /* edges of link 3's sector on each psi node j = is + ie; the sector
-     * test needs it to span less than half a turn */
+    /* directions of the psi nodes j = is + ie, whose sectors span
+     * psi_j +- 2h; the sector test needs that to be under half a turn */
     r->sector_ok = 4.0 * r->h < QRT_PI - 1e-6;
+    r->cos_2h = cos(2.0 * r->h);
+    r->sin_2h = sin(2.0 * r->h);
     for (j = 0; j + 1 < lat->n[1] + lat->n[2]; j++) {
         double psi = r->lo[1] + r->lo[2] + j * r->g;
-        r->sector_edge[j][0] = (float)cos(psi - 2.0 * r->h);
-        r->sector_edge[j][1] = (float)sin(psi - 2.0 * r->h);
-        r->sector_edge[j][2] = (float)cos(psi + 2.0 * r->h);
-        r->sector_edge[j][3] = (float)sin(psi + 2.0 * r->h);
+        r->psi_dir[j][0] = (float)cos(psi);
+        r->psi_dir[j][1] = (float)sin(psi);
     }
-    /* a float edge direction is off by < 1e-7 rad, which moves no point of
-     * the link by more than this */
+    /* a float direction is off by < 1e-7 rad, which moves no point of the
+     * link by more than this */
     r->sector_eps = 2e-7 * (arm->link_m[2] + 1.0) + 1e-9;
 }
 
@@ -350,7 +351,8 @@ static int link3_row_ranges(const struct qrt_raster *r, int is,
                                 pl->reach3);
     if (w < 0.0)
         return 0;
-    return angle_ranges(&r->axis[2], qrt_fast_atan2(dz, du) - r->sigma[is],
+    return angle_ranges(&r->axis[2],
+                        qrt_fast_atan2(dz, du) - (r->lo[1] + is * r->g),
                         w + 2.0 * r->h, ranges);
 }
 
@@ -375,7 +377,8 @@ static int sector_hits(const struct qrt_raster *r, int is, int ie,
                        const struct plane *pl)
 {
     const double len = r->arm->link_m[2];
-    const float *edge = r->sector_edge[is + ie];
+    const float *dir = r->psi_dir[is + ie];
+    double c = dir[0], s = dir[1], edge[4];
     double wu = pl->cu - r->elbow[is][0], wz = pl->z - r->elbow[is][1];
     double reach = pl->reach3 + r->sector_eps, d2 = wu * wu + wz * wz;
     double far = len + reach;
@@ -384,9 +387,14 @@ static int sector_hits(const struct qrt_raster *r, int is, int ie,
         return 0;
     if (d2 <= reach * reach)
         return 1;
+    /* the edges: psi_j rotated by -2h and by +2h */
+    edge[0] = c * r->cos_2h + s * r->sin_2h;
+    edge[1] = s * r->cos_2h - c * r->sin_2h;
+    edge[2] = c * r->cos_2h - s * r->sin_2h;
+    edge[3] = s * r->cos_2h + c * r->sin_2h;
     /* between the edges (the sector spans less than half a turn) */
-    if ((double)edge[0] * wz - (double)edge[1] * wu >= 0.0 &&
-        wu * (double)edge[3] - wz * (double)edge[2] >= 0.0)
+    if (edge[0] * wz - edge[1] * wu >= 0.0 &&
+        wu * edge[3] - wz * edge[2] >= 0.0)
         return 1;
     for (k = 0; k < 2; k++) { /* else the nearer edge segment decides */
         double eu = edge[2 * k], ez = edge[2 * k + 1];

@@ -23,7 +23,6 @@ struct qrt_raster {
     double lo[3];       /* joint value of node 0, radians */
     double elbow_shift; /* bound on elbow travel inside a box, metres */
     struct qrt_axis axis[3];
-    double sigma[QRT_MAX_NS];         /* sigma at each node */
     double elbow[QRT_MAX_NS][2];      /* elbow (u, z) at each sigma node */
     uint64_t full_row[QRT_ROW_WORDS]; /* every eta node of a row */
     double cos_h, sin_h;
@@ -31,9 +30,10 @@ struct qrt_raster {
     /* this raster writes only alpha nodes ia with ia % nparts == part, so
      * that parts can run at once on different cores */
     int part, nparts;
-    /* link 3's sector on each psi node (sigma + eta): cos, sin of its
-     * lower and upper edge; sector_eps covers their float rounding */
-    float sector_edge[QRT_MAX_NS + QRT_MAX_NE - 1][4];
+    /* link 3's direction on each psi node j = is + ie (cos, sin); its
+     * sector there spans psi_j +- 2h; sector_eps covers the float rounding */
+    float psi_dir[QRT_MAX_NS + QRT_MAX_NE - 1][2];
+    double cos_2h, sin_2h;
     /* NULL, or the only rows to raster (bit ia * QRT_MAX_NS + is); other
      * rows may be left partly written */
     const uint64_t *only_rows;

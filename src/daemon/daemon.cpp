@@ -189,8 +189,8 @@ void Daemon::build_mask()
 
 void Daemon::publish_plan(const qrt_plan *plan, const char *status,
                           const std::string &detail, bool blocked,
-                          int64_t ingest, int64_t mask, int64_t search,
-                          int64_t trigger_us)
+                          int64_t ingest, int64_t check, int64_t mask,
+                          int64_t search, int64_t trigger_us)
 {
     qrtplan::plan_t out{};
     out.request_id = goal_.request_id;
@@ -199,6 +199,7 @@ void Daemon::publish_plan(const qrt_plan *plan, const char *status,
     out.detail = detail;
     out.executing_path_blocked = blocked;
     out.ingest_us = ingest;
+    out.check_us = check;
     out.mask_us = mask;
     out.search_us = search;
     if (plan) {
@@ -258,10 +259,10 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
         return; // the picture is kept up to date; nothing to plan for
     qrt_planner_clear_points(pl);
     qrt_planner_add_points(pl, gather_.data(), long(gather_.size() / 3));
-    build_mask();
-    int64_t t2 = now_us();
 
-    // the path being executed: still free on the new mask?
+    // the path being executed: still free among the new points? Asked
+    // before the whole mask is built (only the rows the path passes through
+    // are), so that a stop goes out as early as it can
     bool blocked = false;
     std::array<double, 3> here{};
     bool know_here = current_joints(&here);
@@ -280,7 +281,7 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
         }
         int first = -1;
         if (rest.size() >= 2 &&
-            qrt_planner_check_path(
+            qrt_planner_check_path_now(
                 pl, reinterpret_cast<const double(*)[3]>(rest.data()),
                 int(rest.size()), &first) == QRT_OK &&
             first >= 0) {
@@ -293,6 +294,9 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
             executing_.clear();
         }
     }
+    int64_t t_check = now_us();
+    build_mask();
+    int64_t t2 = now_us();
 
     qrt_target start{}, goal{};
     goal.kind = goal_.goal_kind == qrtplan::plan_request_t::GOAL_XYZ
@@ -312,7 +316,8 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
                      "no start: the request has none and no joint state has "
                      "been received on " +
                          opts_.joint_channel,
-                     blocked, t1 - t0, t2 - t1, 0, trigger_us);
+                     blocked, t1 - t0, t_check - t1, t2 - t_check, 0,
+                     trigger_us);
         return;
     }
     static qrt_plan plan; // 6 KiB: not on the thread's stack
@@ -327,13 +332,13 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
             std::lock_guard<std::mutex> lock(mu_);
             reject(why);
         }
-        publish_plan(nullptr, "invalid_request", why, blocked, t1 - t0, t2 - t1,
-                     t3 - t2, trigger_us);
+        publish_plan(nullptr, "invalid_request", why, blocked, t1 - t0,
+                     t_check - t1, t2 - t_check, t3 - t2, trigger_us);
         return;
     }
     publish_plan(&plan, qrt_plan_status_name(plan.status),
-                 plan.detail ? plan.detail : "", blocked, t1 - t0, t2 - t1,
-                 t3 - t2, trigger_us);
+                 plan.detail ? plan.detail : "", blocked, t1 - t0, t_check - t1,
+                 t2 - t_check, t3 - t2, trigger_us);
     if (plan.status != QRT_STATUS_OK)
         return;
     Path path;
@@ -401,7 +406,7 @@ void Daemon::planner_loop(const std::atomic<bool> &stop)
                 }
                 publish_plan(nullptr, "invalid_request",
                              "NaN/Inf values or an unknown goal kind", false, 0,
-                             0, 0, trigger);
+                             0, 0, 0, trigger);
                 have_goal_ = false;
                 continue;
             }

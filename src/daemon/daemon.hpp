@@ -58,7 +58,8 @@ class Daemon
     void build_mask();
     void publish_plan(const qrt_plan *plan, const char *status,
                       const std::string &detail, bool blocked, int64_t ingest,
-                      int64_t mask, int64_t search, int64_t trigger_us);
+                      int64_t check, int64_t mask, int64_t search,
+                      int64_t trigger_us);
     bool current_joints(std::array<double, 3> *q);
     void reject(const std::string &why);
     static int64_t now_us();
