@@ -54,7 +54,7 @@ int64_t Daemon::wall_us()
 
 Daemon::Daemon(const Options &opts)
     : opts_(opts), lcm_(opts.lcm_url), planner_(new qrt_planner),
-      picture_(opts.window_s)
+      picture_(opts.window_s), guard_picture_(opts.window_s)
 {
 }
 
@@ -72,11 +72,12 @@ void Daemon::on_scan(const lcm::ReceiveBuffer *rbuf, const std::string &channel)
 {
     int64_t t = now_us();
     std::string why;
+    auto msg = std::make_shared<qrtplan::range_scan_t>();
     PendingScan p;
     p.received_us = t;
     bool ok = scan_claims_fit(rbuf->data, int(rbuf->data_size),
                               opts_.max_returns, &why);
-    if (ok && safe_decode(&p.msg, rbuf->data, int(rbuf->data_size)) < 0) {
+    if (ok && safe_decode(msg.get(), rbuf->data, int(rbuf->data_size)) < 0) {
         ok = false;
         why = "not a qrtplan.range_scan_t (wrong type fingerprint or "
               "truncated, " +
@@ -84,32 +85,36 @@ void Daemon::on_scan(const lcm::ReceiveBuffer *rbuf, const std::string &channel)
     }
     if (ok) {
         // refused here, a bad scan never displaces a good pending one
-        why = check_scan(p.msg, opts_.max_returns);
+        why = check_scan(*msg, opts_.max_returns);
         ok = why.empty();
     }
+    p.msg = msg;
     std::lock_guard<std::mutex> lock(mu_);
     if (!ok) {
         scans_rejected_++;
         reject(channel + ": scan refused: " + why);
         return;
     }
-    if (sensors_seen_.count(p.msg.sensor_id) == 0) {
+    const std::string &id = msg->sensor_id;
+    if (sensors_seen_.count(id) == 0) {
         if (sensors_seen_.size() >= kMaxSensors) {
             scans_rejected_++;
-            reject(channel + ": scan refused: sensor '" + p.msg.sensor_id +
-                   "' beyond the " + std::to_string(kMaxSensors) +
-                   " sensors already seen");
+            reject(channel + ": scan refused: sensor '" + id + "' beyond the " +
+                   std::to_string(kMaxSensors) + " sensors already seen");
             return;
         }
-        sensors_seen_.insert(p.msg.sensor_id);
+        sensors_seen_.insert(id);
     }
     scans_received_++;
-    auto it = pending_scans_.find(p.msg.sensor_id);
+    if (guard_planner_) { // latest wins here too (not counted twice)
+        guard_scans_[id] = p;
+        guard_wake_.notify_one();
+    }
+    auto it = pending_scans_.find(id);
     if (it != pending_scans_.end()) {
         scans_dropped_++; // latest wins: the older one was never used
         it->second = std::move(p);
     } else {
-        std::string id = p.msg.sensor_id;
         pending_scans_.emplace(id, std::move(p));
     }
     wake_.notify_one();
@@ -227,27 +232,50 @@ void Daemon::publish_plan(const qrt_plan *plan, const char *status,
     points_dropped_ = out.points_dropped;
 }
 
+// Scans into a picture (the planner's or the guard's). Returns whether
+// any scan was refused (counted and logged by the planner only).
+bool Daemon::ingest(std::map<std::string, PendingScan> &scans, Picture *picture,
+                    long *invalid)
+{
+    bool refused = false;
+    for (auto &kv : scans) {
+        ScanPoints sp;
+        std::string why =
+            scan_to_points(*kv.second.msg, opts_.max_returns, &sp);
+        if (!why.empty()) {
+            refused = true;
+            if (picture == &picture_) {
+                std::lock_guard<std::mutex> lock(mu_);
+                scans_rejected_++;
+                reject("scan from '" + kv.first + "' refused: " + why);
+            }
+            continue;
+        }
+        *invalid += sp.invalid;
+        if (sp.invalid > 0 && picture == &picture_)
+            log(LogLevel::debug, "scan from '%s': %ld returns NaN/Inf or <= 0",
+                kv.first.c_str(), sp.invalid);
+        picture->add(std::move(sp));
+    }
+    return refused;
+}
+
+// The planner thread's path being executed, shared with the guard.
+void Daemon::set_executing(const Path &path)
+{
+    executing_ = path;
+    std::lock_guard<std::mutex> lock(mu_);
+    guard_path_ = path;
+    guard_path_id_++;
+}
+
 void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
                     int64_t trigger_us)
 {
     qrt_planner *pl = planner_.get();
     int64_t t0 = now_us();
     long invalid = 0;
-    for (auto &kv : scans) {
-        ScanPoints sp;
-        std::string why = scan_to_points(kv.second.msg, opts_.max_returns, &sp);
-        if (!why.empty()) {
-            std::lock_guard<std::mutex> lock(mu_);
-            scans_rejected_++;
-            reject("scan from '" + kv.first + "' refused: " + why);
-            continue;
-        }
-        invalid += sp.invalid;
-        if (sp.invalid > 0)
-            log(LogLevel::debug, "scan from '%s': %ld returns NaN/Inf or <= 0",
-                kv.first.c_str(), sp.invalid);
-        picture_.add(std::move(sp));
-    }
+    ingest(scans, &picture_, &invalid);
     int64_t t1 = now_us();
     returns_invalid_ = invalid;
     picture_.gather(&gather_);
@@ -280,18 +308,26 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
             rest = executing_;
         }
         int first = -1;
-        if (rest.size() >= 2 &&
-            qrt_planner_check_path_now(
-                pl, reinterpret_cast<const double(*)[3]>(rest.data()),
-                int(rest.size()), &first) == QRT_OK &&
-            first >= 0) {
+        bool guard_stopped;
+        {
+            std::lock_guard<std::mutex> lock(mu_);
+            guard_stopped = guard_stopped_id_ == guard_path_id_;
+        }
+        if (guard_stopped) { // the guard saw it first and stopped the arm
+            blocked = true;
+            set_executing(Path());
+        } else if (rest.size() >= 2 &&
+                   qrt_planner_check_path_now(
+                       pl, reinterpret_cast<const double(*)[3]>(rest.data()),
+                       int(rest.size()), &first) == QRT_OK &&
+                   first >= 0) {
             blocked = true;
             if (can_)
                 can_->quick_stop(); // before anything else
             log(LogLevel::warn,
                 "the path being executed is blocked (segment %d)%s", first,
                 can_ ? ": quick stop sent" : "");
-            executing_.clear();
+            set_executing(Path());
         }
     }
     int64_t t_check = now_us();
@@ -346,7 +382,7 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
         path.push_back({plan.waypoints_deg[i][0], plan.waypoints_deg[i][1],
                         plan.waypoints_deg[i][2]});
     if (!can_) {
-        executing_ = path;
+        set_executing(path);
         return;
     }
     // the drives take a new path only at rest; a free path being executed
@@ -358,7 +394,7 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
         joint_gap(path.front().data(), path.back().data()) > 0.01) {
         int r = can_->set_path(path);
         if (r == QRTCAN_OK) {
-            executing_ = path;
+            set_executing(path);
             log(LogLevel::info, "executing a path of %zu waypoints",
                 path.size());
         } else {
@@ -411,7 +447,7 @@ void Daemon::planner_loop(const std::atomic<bool> &stop)
                 continue;
             }
             have_goal_ = true;
-            executing_.clear();
+            set_executing(Path());
         }
         // with the drives idle short of the goal, plan again without a scan
         bool resume = false;
@@ -430,6 +466,82 @@ void Daemon::planner_loop(const std::atomic<bool> &stop)
         if (scans.empty() && !new_request && !resume)
             continue;
         replan(scans, new_request || resume, trigger);
+    }
+}
+
+// --- the guard thread (with CAN) -------------------------------------------
+
+// The path being executed against the newest scans, with only its own rows
+// of the mask (qrt_planner_check_path_now): a quick stop the moment a scan
+// blocks it, whatever the planner thread is doing.
+void Daemon::guard_check(std::map<std::string, PendingScan> &scans,
+                         const Path &path, uint64_t path_id)
+{
+    int64_t received = 0, t0 = now_us();
+    for (auto &kv : scans)
+        received = std::max(received, kv.second.received_us);
+    long invalid = 0;
+    ingest(scans, &guard_picture_, &invalid);
+    if (path.size() < 2)
+        return;
+    CanLinkStatus cs = can_->status();
+    if (cs.master.state != QRTCAN_MASTER_MOVING ||
+        !cs.master.all_positions_known)
+        return;
+    Path rest;
+    rest.push_back({cs.master.joints_deg[0], cs.master.joints_deg[1],
+                    cs.master.joints_deg[2]});
+    for (size_t i = size_t(std::max(cs.master.waypoint, 1)); i < path.size();
+         i++)
+        rest.push_back(path[i]);
+    if (rest.size() < 2)
+        return;
+    qrt_planner *pl = guard_planner_.get();
+    guard_picture_.gather(&guard_gather_);
+    qrt_planner_clear_points(pl);
+    qrt_planner_add_points(pl, guard_gather_.data(),
+                           long(guard_gather_.size() / 3));
+    int first = -1;
+    int64_t t1 = now_us();
+    if (qrt_planner_check_path_now(
+            pl, reinterpret_cast<const double(*)[3]>(rest.data()),
+            int(rest.size()), &first) != QRT_OK ||
+        first < 0)
+        return;
+    int64_t t2 = now_us();
+    {
+        std::lock_guard<std::mutex> lock(mu_);
+        if (guard_path_id_ != path_id)
+            return; // the planner has moved on to another path meanwhile
+        guard_stopped_id_ = path_id;
+        guard_stops_++;
+    }
+    can_->quick_stop();
+    log(LogLevel::warn,
+        "the path being executed is blocked (segment %d): quick stop sent "
+        "%.1f ms after the scan arrived (waiting %.1f, ingest %.1f, check "
+        "%.1f ms)",
+        first, 1e-3 * double(now_us() - received), 1e-3 * double(t0 - received),
+        1e-3 * double(t1 - t0), 1e-3 * double(t2 - t1));
+}
+
+void Daemon::guard_loop(const std::atomic<bool> &stop)
+{
+    while (!stop) {
+        std::map<std::string, PendingScan> scans;
+        Path path;
+        uint64_t id;
+        {
+            std::unique_lock<std::mutex> lock(mu_);
+            guard_wake_.wait_for(lock, std::chrono::milliseconds(50),
+                                 [&] { return stop || !guard_scans_.empty(); });
+            scans.swap(guard_scans_);
+            if (guard_stopped_id_ != guard_path_id_)
+                path = guard_path_;
+            id = guard_path_id_;
+        }
+        if (!scans.empty())
+            guard_check(scans, path, id);
     }
 }
 
@@ -508,6 +620,8 @@ int Daemon::run(const std::atomic<bool> &stop)
             return 2;
         }
         log(LogLevel::info, "CAN: drives on %s", opts_.can_iface.c_str());
+        guard_planner_.reset(new qrt_planner);
+        qrt_planner_init(guard_planner_.get(), &opts_.params); // checked above
     }
     started_us_ = now_us();
     lcm_.subscribe(opts_.scan_channel + "(_.*)?", &Daemon::on_scan, this);
@@ -519,6 +633,9 @@ int Daemon::run(const std::atomic<bool> &stop)
         opts_.request_channel.c_str());
     std::thread planner([&] { planner_loop(stop); });
     std::thread clock([&] { clock_loop(stop); });
+    std::thread guard;
+    if (guard_planner_)
+        guard = std::thread([&] { guard_loop(stop); });
     while (!stop)
         // the stop signal itself interrupts the wait: that is no failure
         if (lcm_.handleTimeout(100) < 0 && !stop) {
@@ -526,8 +643,11 @@ int Daemon::run(const std::atomic<bool> &stop)
             std::this_thread::sleep_for(std::chrono::milliseconds(100));
         }
     wake_.notify_all();
+    guard_wake_.notify_all();
     planner.join();
     clock.join();
+    if (guard.joinable())
+        guard.join();
     if (can_) {
         can_->quick_stop();
         can_.reset(); // leaves the drives holding (docs/can-master.md)

@@ -3,8 +3,10 @@
 //
 // Three threads: LCM (decodes and validates messages, keeps only the newest
 // scan per sensor and the newest request: a flood replaces, never queues),
-// the planner (ingest, mask, path check, plan, publish), and the clock (the
-// 1 Hz status and, with CAN, the joint state at 20 Hz).
+// the planner (ingest, path check, mask, plan, publish), and the clock (the
+// 1 Hz status and, with CAN, the joint state at 20 Hz). With CAN a fourth,
+// the guard, checks the path being executed against every new scan with a
+// planner of its own, so that a stop never waits for a replan to finish.
 #pragma once
 
 #include <array>
@@ -43,7 +45,8 @@ class Daemon
 
   private:
     struct PendingScan {
-        qrtplan::range_scan_t msg;
+        // shared by the planner's and the guard's queues, never copied
+        std::shared_ptr<const qrtplan::range_scan_t> msg;
         int64_t received_us;
     };
     using Path = std::vector<std::array<double, 3>>;
@@ -53,6 +56,12 @@ class Daemon
     void on_joints(const lcm::ReceiveBuffer *rbuf, const std::string &channel);
     void planner_loop(const std::atomic<bool> &stop);
     void clock_loop(const std::atomic<bool> &stop);
+    void guard_loop(const std::atomic<bool> &stop);
+    void guard_check(std::map<std::string, PendingScan> &scans,
+                     const Path &path, uint64_t path_id);
+    void set_executing(const Path &path);
+    bool ingest(std::map<std::string, PendingScan> &scans, Picture *picture,
+                long *invalid);
     void replan(std::map<std::string, PendingScan> &scans, bool new_request,
                 int64_t trigger_us);
     void build_mask();
@@ -89,6 +98,19 @@ class Daemon
     long picture_points_ = 0, points_dropped_ = 0;
     std::string last_error_;
     int64_t started_us_ = 0;
+    // the guard's share (with CAN): its own queue of the newest scans, and
+    // the path being executed as the planner last handed it to the drives
+    std::condition_variable guard_wake_;
+    std::map<std::string, PendingScan> guard_scans_;
+    Path guard_path_;
+    uint64_t guard_path_id_ = 0;        // bumped whenever the path changes
+    uint64_t guard_stopped_id_ = ~0ULL; // the path the guard stopped
+    int64_t guard_stops_ = 0;
+
+    // guard thread only
+    std::unique_ptr<qrt_planner> guard_planner_;
+    Picture guard_picture_;
+    std::vector<double> guard_gather_;
 
     // planner thread only
     bool have_goal_ = false;
