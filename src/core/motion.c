@@ -131,6 +131,8 @@ double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],
             if (c < best)
                 best = c;
         }
+        if (best <= 0.0)
+            return best; /* colliding: how deep does not matter */
     }
     return best;
 }
@@ -139,6 +141,31 @@ double qrt_clearance(const struct qrt_arm *arm, const double radius_m[3],
                      const struct qrt_points *pts, const double q_deg[3])
 {
     return qrt_clearance_capped(arm, radius_m, pts, q_deg, 1e30);
+}
+
+/* Advancement on a blocked motion crawls ever closer to the contact, one
+ * clearance over all points per step. After WITNESS_AFTER steps it looks
+ * for a witness instead: a colliding configuration among WITNESS_SAMPLES
+ * samples, taken coarse to fine (the far end first, then the middle, the
+ * quarters, ...), decides the motion. Advancement could never have passed
+ * a colliding configuration, so the answer is the same, only sooner. */
+#define WITNESS_AFTER 4
+#define WITNESS_SAMPLES 32
+
+static int has_witness(const struct qrt_arm *arm, const double radius_m[3],
+                       const struct qrt_points *pts, const double a_deg[3],
+                       const double d[3])
+{
+    int level, k, j;
+    for (level = 1; level <= WITNESS_SAMPLES; level *= 2)
+        for (k = 1; k <= level; k += 2) { /* s = k / level, new ones only */
+            double q[3], s = (double)k / level;
+            for (j = 0; j < 3; j++)
+                q[j] = a_deg[j] + s * d[j];
+            if (qrt_clearance_capped(arm, radius_m, pts, q, 2e-7) <= 1e-7)
+                return 1;
+        }
+    return 0;
 }
 
 int qrt_motion_free_exact(const struct qrt_arm *arm, const double radius_m[3],
@@ -157,6 +184,8 @@ int qrt_motion_free_exact(const struct qrt_arm *arm, const double radius_m[3],
             QRT_DEG;
     for (step = 0; step < max_steps; step++) {
         double q[3], c;
+        if (step == WITNESS_AFTER && has_witness(arm, radius_m, pts, a_deg, d))
+            return 0;
         for (j = 0; j < 3; j++)
             q[j] = a_deg[j] + t * d[j];
         /* clearance beyond what carries the arm to b is never needed: a

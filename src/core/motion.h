@@ -24,12 +24,15 @@ void qrt_motion_mark_rows(const struct qrt_mask *mask, const double a_deg[3],
                           const double b_deg[3], uint64_t *rows);
 
 /* Smallest clearance (distance minus collision radius, metres) between the
- * arm at q_deg and the points; a large value when there are none. */
+ * arm at q_deg and the points; a large value when there are none; where
+ * the arm collides, some value <= 0. */
 double qrt_clearance(const struct qrt_arm *arm, const double radius_m[3],
                      const struct qrt_points *pts, const double q_deg[3]);
 
-/* min(clearance, cap): the same where the clearance is below cap, and
- * cheaper, since points farther than cap from the arm are skipped. */
+/* min(clearance, cap) where the arm is clear of every point, cheaper than
+ * qrt_clearance since points farther than cap from the arm are skipped;
+ * where it collides, some value <= 0 (the search stops at the first
+ * colliding point). */
 double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],
                             const struct qrt_points *pts, const double q_deg[3],
                             double cap);

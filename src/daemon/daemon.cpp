@@ -322,11 +322,18 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
                        int(rest.size()), &first) == QRT_OK &&
                    first >= 0) {
             blocked = true;
-            if (can_)
+            bool guard_was_first;
+            { // the guard may have found it at the same time: one stop
+                std::lock_guard<std::mutex> lock(mu_);
+                guard_was_first = guard_stopped_id_ == guard_path_id_;
+                guard_stopped_id_ = guard_path_id_;
+            }
+            if (can_ && !guard_was_first)
                 can_->quick_stop(); // before anything else
-            log(LogLevel::warn,
-                "the path being executed is blocked (segment %d)%s", first,
-                can_ ? ": quick stop sent" : "");
+            if (!guard_was_first)
+                log(LogLevel::warn,
+                    "the path being executed is blocked (segment %d)%s", first,
+                    can_ ? ": quick stop sent" : "");
             set_executing(Path());
         }
     }
