@@ -3,6 +3,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <pthread.h>
+#include <sched.h>
 #include <thread>
 
 #include "decode.hpp"
@@ -534,6 +536,16 @@ void Daemon::guard_check(std::map<std::string, PendingScan> &scans,
 
 void Daemon::guard_loop(const std::atomic<bool> &stop)
 {
+    // ahead of the planner's mask threads where the system allows it (root
+    // or CAP_SYS_NICE): the lowest real-time priority, and the guard sleeps
+    // between scans, so it cannot starve anything else
+    sched_param sp{};
+    sp.sched_priority = 1;
+    int rc = pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp);
+    log(rc == 0 ? LogLevel::info : LogLevel::debug, "guard thread: %s",
+        rc == 0 ? "real-time priority (SCHED_FIFO 1)"
+                : "normal priority (no permission for "
+                  "SCHED_FIFO)");
     while (!stop) {
         std::map<std::string, PendingScan> scans;
         Path path;

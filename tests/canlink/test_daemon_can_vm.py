@@ -134,9 +134,14 @@ def main():
                 check(False, f"trial {trial}: the arm did not move")
                 break
             n_plans = len(plans)
+            # stamped when the encoded scan goes to LCM, as a sensor driver
+            # would publish it (building it in numpy on the emulated CPU
+            # takes milliseconds that are not the daemon's)
             blocking = cf.scan_from_points(wall)
-            lc.publish("QRT_SCAN", blocking.encode())
-            sent = blocking.utime / 1e6
+            blocking.utime = cf.now_us()
+            data = blocking.encode()
+            sent = time.time()
+            lc.publish("QRT_SCAN", data)
             got = pump(15, lambda: any(p.executing_path_blocked
                                        for p in plans[n_plans:]))
             stopped = pump(15, lambda: joints and not joints[-1].moving and
