@@ -141,9 +141,12 @@ def main():
         ours = stats.get((fam, "qrtplan"))
         rrt = stats.get((fam, "RRTConnect"))
         if ours and rrt and ours["time"] and rrt["time"]:
-            print(f"{fam}: qrtplan {np.median(rrt['time']) / np.median(ours['time']):.1f}x "
-                  f"faster than RRTConnect in median time to a path; median length "
-                  f"{np.median(ours['len']):.0f} vs {np.median(rrt['len']):.0f} deg")
+            ratio = np.median(rrt["time"]) / np.median(ours["time"])
+            who = (f"qrtplan {ratio:.1f}x faster than RRTConnect" if ratio >= 1
+                   else f"RRTConnect {1 / ratio:.1f}x faster than qrtplan")
+            print(f"{fam}: {who} in median time to a path; median length "
+                  f"{np.median(ours['len']):.0f} (qrtplan) vs "
+                  f"{np.median(rrt['len']):.0f} deg (RRTConnect)")
     if not args.smoke:
         plot(lines, fams, os.path.join(args.out, "ompl_compare.png"))
     for p in problems:
