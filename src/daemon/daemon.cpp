@@ -234,19 +234,17 @@ void Daemon::publish_plan(const qrt_plan *plan, const char *status,
     points_dropped_ = out.points_dropped;
 }
 
-// Scans into a picture (the planner's or the guard's). Returns whether
-// any scan was refused (counted and logged by the planner only).
-bool Daemon::ingest(std::map<std::string, PendingScan> &scans, Picture *picture,
-                    long *invalid)
+// Scans into a picture (the planner's, which reports refusals and invalid
+// returns, or the guard's, which leaves that to the planner).
+void Daemon::ingest(std::map<std::string, PendingScan> &scans, Picture *picture,
+                    bool report, long *invalid)
 {
-    bool refused = false;
     for (auto &kv : scans) {
         ScanPoints sp;
         std::string why =
             scan_to_points(*kv.second.msg, opts_.max_returns, &sp);
         if (!why.empty()) {
-            refused = true;
-            if (picture == &picture_) {
+            if (report) {
                 std::lock_guard<std::mutex> lock(mu_);
                 scans_rejected_++;
                 reject("scan from '" + kv.first + "' refused: " + why);
@@ -254,12 +252,11 @@ bool Daemon::ingest(std::map<std::string, PendingScan> &scans, Picture *picture,
             continue;
         }
         *invalid += sp.invalid;
-        if (sp.invalid > 0 && picture == &picture_)
+        if (sp.invalid > 0 && report)
             log(LogLevel::debug, "scan from '%s': %ld returns NaN/Inf or <= 0",
                 kv.first.c_str(), sp.invalid);
         picture->add(std::move(sp));
     }
-    return refused;
 }
 
 // The planner thread's path being executed, shared with the guard.
@@ -277,7 +274,7 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
     qrt_planner *pl = planner_.get();
     int64_t t0 = now_us();
     long invalid = 0;
-    ingest(scans, &picture_, &invalid);
+    ingest(scans, &picture_, true, &invalid);
     int64_t t1 = now_us();
     returns_invalid_ = invalid;
     picture_.gather(&gather_);
@@ -490,7 +487,7 @@ void Daemon::guard_check(std::map<std::string, PendingScan> &scans,
     for (auto &kv : scans)
         received = std::max(received, kv.second.received_us);
     long invalid = 0;
-    ingest(scans, &guard_picture_, &invalid);
+    ingest(scans, &guard_picture_, false, &invalid);
     if (path.size() < 2)
         return;
     CanLinkStatus cs = can_->status();
@@ -523,7 +520,6 @@ void Daemon::guard_check(std::map<std::string, PendingScan> &scans,
         if (guard_path_id_ != path_id)
             return; // the planner has moved on to another path meanwhile
         guard_stopped_id_ = path_id;
-        guard_stops_++;
     }
     can_->quick_stop();
     log(LogLevel::warn,

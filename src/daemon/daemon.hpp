@@ -60,8 +60,8 @@ class Daemon
     void guard_check(std::map<std::string, PendingScan> &scans,
                      const Path &path, uint64_t path_id);
     void set_executing(const Path &path);
-    bool ingest(std::map<std::string, PendingScan> &scans, Picture *picture,
-                long *invalid);
+    void ingest(std::map<std::string, PendingScan> &scans, Picture *picture,
+                bool report, long *invalid);
     void replan(std::map<std::string, PendingScan> &scans, bool new_request,
                 int64_t trigger_us);
     void build_mask();
@@ -105,7 +105,6 @@ class Daemon
     Path guard_path_;
     uint64_t guard_path_id_ = 0;        // bumped whenever the path changes
     uint64_t guard_stopped_id_ = ~0ULL; // the path the guard stopped
-    int64_t guard_stops_ = 0;
 
     // guard thread only
     std::unique_ptr<qrt_planner> guard_planner_;

@@ -17,6 +17,7 @@ plans from the joints the drives report, and moves the arm:
 """
 import argparse
 import os
+import re
 import subprocess
 import sys
 import time
@@ -231,6 +232,12 @@ def main():
     daemon_log.seek(0)
     log = daemon_log.read()
     check("blocked" in log, "the daemon logged the blocked path")
+    # the guard thread (not only the planner thread's replan) stops the arm:
+    # its stops are the ones logged with their timing
+    guard = re.findall(r"quick stop sent ([0-9.]+) ms after the scan arrived", log)
+    check(len(guard) >= 1,
+          f"the guard thread sent {len(guard)} of the {len(sent_times)} stops "
+          f"(scan arrived -> stop sent: {', '.join(guard[:5])} ms)")
     print(f"{len(failures)} failures, {time.time() - t0:.1f} s", flush=True)
     if failures:
         print(log[-3000:])
