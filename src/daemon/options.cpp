@@ -45,6 +45,7 @@ const char *kUsage =
     "  --speed DEG_S            top joint speed (30)\n"
     "  --accel DEG_S2           joint acceleration (60)\n"
     "  --heartbeat-timeout MS   a drive silent this long is lost (300)\n"
+    "  --sdo-timeout MS         one SDO attempt of three (50)\n"
     "  --log-level LEVEL        error, warn, info or debug (info)\n"
     "  --config FILE            read settings from FILE first\n"
     "  --help, --version\n"
@@ -144,6 +145,10 @@ bool apply(Options *o, const std::string &key, const std::string &value,
         if (!number(20, 60000))
             return bad("milliseconds in 20..60000");
         o->can.heartbeat_timeout_us = uint32_t(v * 1000.0);
+    } else if (key == "sdo-timeout") {
+        if (!number(1, 10000))
+            return bad("milliseconds in 1..10000");
+        o->can.sdo_timeout_us = uint32_t(v * 1000.0);
     } else if (key == "log-level") {
         if (value != "error" && value != "warn" && value != "info" &&
             value != "debug")

@@ -171,11 +171,13 @@ def main():
     url = "udpm://239.255.76.67:7778?ttl=0&recv_buf_size=4194304"
     log = open(os.path.join(args.out, "qrtpland.log"), "w+")
     # the VM's CPU is emulated and the drives here are Python threads: on a
-    # busy host their heartbeats come late, so the daemon waits 1.5 s (300
-    # ms by default) before it calls a drive lost
+    # busy host their heartbeats and SDO answers come late, so the daemon
+    # waits 1.5 s (300 ms by default) before it calls a drive lost and 500
+    # ms (50) for an SDO answer (seen: "drive did not answer an SDO" at 50)
     daemon = subprocess.Popen([args.daemon, "--lcm-url", url, "--can", "vcan0",
                                "--speed", "60", "--accel", "120",
-                               "--heartbeat-timeout", "1500"],
+                               "--heartbeat-timeout", "1500",
+                               "--sdo-timeout", "500"],
                               stdout=log, stderr=subprocess.STDOUT)
     lc = lcm.LCM(url)
     joints = []
