@@ -124,6 +124,19 @@ int qrt_planner_build_mask_end(struct qrt_planner *pl);
 int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
                      const struct qrt_target *goal, struct qrt_plan *plan);
 
+/* The shortcut of an open scene, before any mask is built: with joint
+ * targets, builds only the mask rows the straight motion from start to goal
+ * passes through and tests that motion as qrt_planner_plan does. Returns 1
+ * with *plan the straight motion (status ok, cells_blocked -1: the mask was
+ * not built), or 0: call qrt_planner_build_mask and qrt_planner_plan (also
+ * for xyz targets, simplification off, or points lost to capacity); or
+ * QRT_E_INVALID / QRT_E_LIMITS for bad targets. Either way the mask is left
+ * partial, so a later qrt_planner_plan needs qrt_planner_build_mask first. */
+int qrt_planner_plan_straight(struct qrt_planner *pl,
+                              const struct qrt_target *start,
+                              const struct qrt_target *goal,
+                              struct qrt_plan *plan);
+
 /* Is a path still safe on the built mask (a replan's question about the
  * path being executed)? *first_blocked is the index of the first segment
  * (waypoint i to i+1) that cannot be proved free, or -1 if every segment is

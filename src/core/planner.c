@@ -452,6 +452,41 @@ static enum qrt_plan_status end_status(enum end_outcome o, int is_goal)
     return is_goal ? QRT_STATUS_GOAL_BLOCKED : QRT_STATUS_START_BLOCKED;
 }
 
+int qrt_planner_plan_straight(struct qrt_planner *pl,
+                              const struct qrt_target *start,
+                              const struct qrt_target *goal,
+                              struct qrt_plan *plan)
+{
+    double wp[2][3];
+    int rc, w;
+    if ((rc = check_target(&pl->params.arm, start)) != QRT_OK ||
+        (rc = check_target(&pl->params.arm, goal)) != QRT_OK)
+        return rc;
+    if (start->kind != QRT_TARGET_JOINTS || goal->kind != QRT_TARGET_JOINTS ||
+        !pl->params.simplify || pl->points.dropped > 0)
+        return 0;
+    copy_joints(wp[0], start->value);
+    copy_joints(wp[1], goal->value);
+    /* the rows the straight motion passes through, and the same mask walk
+     * that qrt_planner_plan's own straight-motion test makes on them */
+    for (w = 0; w < QRT_ROW_SET_WORDS; w++)
+        pl->check_rows[w] = 0;
+    qrt_motion_mark_rows(&pl->mask, wp[0], wp[1], pl->check_rows);
+    start_mask(pl);
+    raster_part(pl, 0, 1, pl->check_rows);
+    if (!qrt_motion_free_on_mask(&pl->mask, wp[0], wp[1]))
+        return 0;
+    reset_plan(pl, plan);
+    plan->cells_blocked = -1; /* the whole mask was never built */
+    copy_joints(plan->start_deg, wp[0]);
+    copy_joints(plan->goal_deg, wp[1]);
+    append_waypoint(pl, plan, wp[0], 0);
+    append_waypoint(pl, plan, wp[1], 1);
+    plan->cost_deg = plan->lattice_cost_deg = route_cost(pl, plan);
+    set_status(plan, QRT_STATUS_OK, "straight motion is free");
+    return 1;
+}
+
 int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
                      const struct qrt_target *goal, struct qrt_plan *plan)
 {

@@ -5,6 +5,8 @@
  * rows the path passes through: never free where the whole mask is not,
  * catches the same point before any build, agrees with the whole mask on
  * (nearly) every path, and leaves a mask the planner refuses. */
+#include <math.h>
+
 #include "check.h"
 #include "qrtplan/qrtplan.h"
 
@@ -13,7 +15,8 @@ static struct qrt_plan plan;
 
 int main(void)
 {
-    long trial, planned = 0, caught = 0, agree = 0;
+    long trial, planned = 0, caught = 0, agree = 0, straight_ok = 0,
+                straight_full = 0;
     static struct qrt_plan plan2;
     test_seed(9191);
     for (trial = 0; trial < test_count(60); trial++) {
@@ -21,7 +24,7 @@ int main(void)
         struct qrt_target s = {QRT_TARGET_JOINTS, {0, 0, 0}};
         struct qrt_target g = {QRT_TARGET_JOINTS, {0, 0, 0}};
         double cloud[3 * 40], q[3], p[4][3], t;
-        int i, k, seg, blocked, now;
+        int i, k, seg, blocked, now, straight;
         for (i = 0; i < 40; i++) {
             double a = test_uniform(-3.14159, 3.14159);
             cloud[3 * i] = 0.6 * cos(a) + test_uniform(-0.05, 0.05);
@@ -35,7 +38,24 @@ int main(void)
         qrt_params_default(&prm);
         qrt_planner_init(&pl, &prm);
         qrt_planner_add_points(&pl, cloud, 40);
+        /* the straight motion before any mask: proved only where the whole
+         * mask proves it too, and then the same plan */
+        straight = qrt_planner_plan_straight(&pl, &s, &g, &plan2);
+        CHECK(straight == 0 || straight == 1, "plan_straight returned %d",
+              straight);
         qrt_planner_build_mask(&pl);
+        if (qrt_planner_plan(&pl, &s, &g, &plan) == QRT_OK) {
+            int full = plan.status == QRT_STATUS_OK && plan.n_waypoints == 2 &&
+                       plan.nodes_expanded == 0;
+            CHECK(!straight || full,
+                  "trial %ld: straight before the mask, not after it", trial);
+            CHECK(!straight || (plan2.n_waypoints == 2 &&
+                                fabs(plan2.cost_deg - plan.cost_deg) < 1e-9 &&
+                                plan2.cells_blocked == -1),
+                  "trial %ld: the straight plans differ", trial);
+            straight_ok += straight;
+            straight_full += full;
+        }
         if (qrt_planner_plan(&pl, &s, &g, &plan) != QRT_OK ||
             plan.status != QRT_STATUS_OK || plan.n_waypoints < 2)
             continue;
@@ -101,6 +121,11 @@ int main(void)
     printf("paths checked: %ld, obstacles on them caught: %ld; "
            "check_path_now free on %ld of the planned paths\n",
            planned, caught, agree);
+    printf("straight motions: %ld proved before the mask, %ld with it\n",
+           straight_ok, straight_full);
+    CHECK(straight_ok == straight_full && straight_full > 0,
+          "plan_straight proved %ld of the %ld straight plans", straight_ok,
+          straight_full);
     CHECK(agree * 100 >= planned * 95,
           "check_path_now proved only %ld of %ld planned paths free", agree,
           planned);
