@@ -452,13 +452,29 @@ static enum qrt_plan_status end_status(enum end_outcome o, int is_goal)
     return is_goal ? QRT_STATUS_GOAL_BLOCKED : QRT_STATUS_START_BLOCKED;
 }
 
+/* Only the mask rows the motions between consecutive waypoints pass
+ * through (the walk that tests a motion marks them, so exactly those). The
+ * mask is partial, hence stale, from here on. */
+static void build_rows_along(struct qrt_planner *pl,
+                             const double (*waypoints_deg)[3], int n)
+{
+    int i, w;
+    for (w = 0; w < QRT_ROW_SET_WORDS; w++)
+        pl->check_rows[w] = 0;
+    for (i = 0; i + 1 < n; i++)
+        qrt_motion_mark_rows(&pl->mask, waypoints_deg[i], waypoints_deg[i + 1],
+                             pl->check_rows);
+    start_mask(pl);
+    raster_part(pl, 0, 1, pl->check_rows);
+}
+
 int qrt_planner_plan_straight(struct qrt_planner *pl,
                               const struct qrt_target *start,
                               const struct qrt_target *goal,
                               struct qrt_plan *plan)
 {
     double wp[2][3];
-    int rc, w;
+    int rc;
     if ((rc = check_target(&pl->params.arm, start)) != QRT_OK ||
         (rc = check_target(&pl->params.arm, goal)) != QRT_OK)
         return rc;
@@ -469,11 +485,7 @@ int qrt_planner_plan_straight(struct qrt_planner *pl,
     copy_joints(wp[1], goal->value);
     /* the rows the straight motion passes through, and the same mask walk
      * that qrt_planner_plan's own straight-motion test makes on them */
-    for (w = 0; w < QRT_ROW_SET_WORDS; w++)
-        pl->check_rows[w] = 0;
-    qrt_motion_mark_rows(&pl->mask, wp[0], wp[1], pl->check_rows);
-    start_mask(pl);
-    raster_part(pl, 0, 1, pl->check_rows);
+    build_rows_along(pl, (const double(*)[3])wp, 2);
     if (!qrt_motion_free_on_mask(&pl->mask, wp[0], wp[1]))
         return 0;
     reset_plan(pl, plan);
@@ -619,18 +631,12 @@ int qrt_planner_check_path_now(struct qrt_planner *pl,
                                const double (*waypoints_deg)[3], int n,
                                int *first_blocked)
 {
-    int rc, i, w;
+    int rc;
     *first_blocked = -1;
     rc = check_waypoints(pl, waypoints_deg, n);
     if (rc != QRT_OK)
         return rc;
-    for (w = 0; w < QRT_ROW_SET_WORDS; w++)
-        pl->check_rows[w] = 0;
-    for (i = 0; i + 1 < n; i++)
-        qrt_motion_mark_rows(&pl->mask, waypoints_deg[i], waypoints_deg[i + 1],
-                             pl->check_rows);
-    start_mask(pl); /* the mask is partial, hence stale, from here on */
-    raster_part(pl, 0, 1, pl->check_rows);
+    build_rows_along(pl, waypoints_deg, n);
     *first_blocked = pl->points.dropped > 0
                          ? 0
                          : first_blocked_segment(pl, waypoints_deg, n);
