@@ -96,8 +96,16 @@ class Client:
         return self.status[-1] if self.status else None
 
 
+# The daemon's LCM receive buffer. A 14,440-return scan is 350 KB, more
+# than the kernel's default 208 KB: with the LCM thread descheduled for a
+# moment on a busy machine, its fragments overflowed the socket and the scan
+# was lost (seen once in CI: a plan from an empty picture). 4 MiB, as the
+# kernel here allows (net.core.rmem_max), as the daemon would be run.
+RECV_BUF = "&recv_buf_size=4194304"
+
+
 class Daemon:
-    def __init__(self, tmp_path, *args, url_options=""):
+    def __init__(self, tmp_path, *args, url_options=RECV_BUF):
         self.port = next(_ports)
         self.url = f"udpm://239.255.76.67:{self.port}?ttl=0{url_options}"
         self.log = open(tmp_path / f"qrtpland-{self.port}.log", "w+")
@@ -139,7 +147,7 @@ class Daemon:
 def daemon(tmp_path):
     started = []
 
-    def start(*args, url_options=""):
+    def start(*args, url_options=RECV_BUF):
         d = Daemon(tmp_path, *args, url_options=url_options)
         started.append(d)
         c = Client(d.url)

@@ -164,7 +164,7 @@ def test_a_scan_beyond_capacity_says_what_was_dropped(daemon):
     # (conservatively grown) and the plan says at which size; at 64 mm the
     # whole reach fits the table, so in this build nothing is dropped, and a
     # drop would have to say `capacity`.
-    d, c = daemon(url_options="&recv_buf_size=4194304")
+    d, c = daemon()  # the fixture's 4 MiB receive buffer
     rng = np.random.default_rng(5)
     pts = rng.uniform(-1.0, 1.0, size=(250_000, 3)) * [1, 1, 0.6] + [0, 0, 0.3]
     c.publish("QRT_SCAN", scan_from_points(pts, max_range=10.0))
