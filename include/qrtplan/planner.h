@@ -72,6 +72,35 @@ struct qrt_heap_entry {
     int32_t node;
 };
 
+/* A cluster of nearby points, prepared once so that its cells can be
+ * rastered one alpha node at a time (qrt_planner_plan_now). */
+#define QRT_ALPHA_WORDS ((QRT_MAX_NA + 63) / 64)
+struct qrt_cluster_geom {
+    double c[3], ball, rho; /* bounding ball (one point: itself, ball 0) */
+    int32_t first, m;       /* its points: members[first .. first + m - 1] */
+    uint64_t alpha[QRT_ALPHA_WORDS]; /* alpha nodes it may block */
+};
+
+/* The clusters qrt_planner_plan_now keeps while it searches, in the tail of
+ * the heap array: at most 5 bytes of every 8 (QRT_LAZY_HEAP entries stay
+ * for the heap; should it need more, the rest of the mask is built and the
+ * clusters given up). More clusters or points than this: the whole mask is
+ * built first instead. */
+#define QRT_LAZY_MAX_CLUSTERS                                                  \
+    (QRT_MAX_POINTS < QRT_MAX_NODES / 16 ? QRT_MAX_POINTS : QRT_MAX_NODES / 16)
+#define QRT_LAZY_MAX_POINTS                                                    \
+    (QRT_MAX_POINTS < QRT_MAX_NODES / 4 ? QRT_MAX_POINTS : QRT_MAX_NODES / 4)
+struct qrt_lazy_clusters {
+    struct qrt_cluster_geom geom[QRT_LAZY_MAX_CLUSTERS];
+    int32_t members[QRT_LAZY_MAX_POINTS];
+};
+#define QRT_LAZY_HEAP                                                          \
+    (QRT_MAX_NODES - (long)((sizeof(struct qrt_lazy_clusters) +                \
+                             sizeof(struct qrt_heap_entry) - 1) /              \
+                            sizeof(struct qrt_heap_entry)))
+
+struct qrt_raster; /* internal: the conversion's tables */
+
 struct qrt_planner {
     struct qrt_params params;
     struct qrt_points points;
@@ -88,9 +117,24 @@ struct qrt_planner {
         float dist[QRT_MAX_NODES];
         int32_t cluster_scratch[QRT_MAX_NODES];
     } search;
-    struct qrt_heap_entry heap[QRT_MAX_NODES]; /* later holds the path */
-    int32_t heap_pos[QRT_MAX_NODES];           /* -1 unseen, -2 closed */
+    union {
+        struct qrt_heap_entry heap[QRT_MAX_NODES]; /* later holds the path */
+        struct {
+            struct qrt_heap_entry heap[QRT_LAZY_HEAP];
+            struct qrt_lazy_clusters clusters;
+        } lazy;
+    } open;
+    int32_t heap_pos[QRT_MAX_NODES]; /* -1 unseen, -2 closed */
     uint8_t parent_dir[QRT_MAX_NODES];
+    /* while qrt_planner_plan_now runs: rows are built as they are read */
+    int lazy;
+    /* the kept clusters and the rows_ready rows are still those of the
+     * points in the table (after qrt_planner_check_path_now or _plan_now),
+     * so the next qrt_planner_plan_now starts from them */
+    int lazy_kept;
+    long lazy_clusters;             /* in open.lazy.clusters */
+    struct qrt_raster *lazy_raster; /* on qrt_planner_plan_now's stack */
+    uint64_t rows_ready[QRT_ROW_SET_WORDS];
 };
 
 /* QRT_OK; QRT_E_INVALID for non-finite or negative margins, a bad arm or a
@@ -123,6 +167,16 @@ int qrt_planner_build_mask_end(struct qrt_planner *pl);
  * outside the limits, QRT_E_INVALID for NaN/Inf or a stale mask. */
 int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
                      const struct qrt_target *goal, struct qrt_plan *plan);
+
+/* qrt_planner_build_mask and qrt_planner_plan in one, with less work: the
+ * plan is the same (the same waypoints, cost and nodes expanded), but only
+ * the mask rows it reads are built, as the search, the start and goal
+ * connections and the shortcuts read them. plan->cells_blocked is -1 (the
+ * whole mask was not built), and the mask is left partial: a later
+ * qrt_planner_plan or qrt_planner_check_path needs qrt_planner_build_mask
+ * first. Same return codes as qrt_planner_plan, without the stale mask. */
+int qrt_planner_plan_now(struct qrt_planner *pl, const struct qrt_target *start,
+                         const struct qrt_target *goal, struct qrt_plan *plan);
 
 /* The shortcut of an open scene, before any mask is built: with joint
  * targets, builds only the mask rows the straight motion from start to goal

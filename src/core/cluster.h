@@ -5,6 +5,12 @@
 
 #include <stdint.h>
 
+/* Edge of the cubes that group points for the raster: larger groups share
+ * more work, but their bounding balls are less often already covered. */
+#ifndef QRT_CLUSTER_CELL_M
+#define QRT_CLUSTER_CELL_M 0.04
+#endif
+
 typedef void (*qrt_cluster_visit)(void *ctx, const int32_t *members, int m);
 
 /* Scratch entries qrt_cluster_points needs for n points. */

@@ -37,8 +37,8 @@ static int cell_of(const struct qrt_lattice *lat, const double x[3], int ijk[3])
  * mask row (alpha, sigma) of every cell the walk would test, and return 1.
  * One walk for both, so a check on rows built from the marks looks at
  * exactly the rows that were built. */
-static int walk(const struct qrt_mask *mask, const double a_deg[3],
-                const double b_deg[3], uint64_t *rows)
+static int walk(const struct qrt_mask *mask, qrt_row_need need, void *ctx,
+                const double a_deg[3], const double b_deg[3], uint64_t *rows)
 {
     const struct qrt_lattice *lat = &mask->lat;
     double x0[3], dx[3], d[3], next_t[3], step_t[3], t = 0.0;
@@ -79,8 +79,13 @@ static int walk(const struct qrt_mask *mask, const double a_deg[3],
                 long bit = (long)ijk[0] * QRT_MAX_NS + ijk[1];
                 rows[bit >> 6] |= 1ULL << (bit & 63);
             }
-        } else if (!inside || qrt_mask_blocked(mask, ijk)) {
-            return 0;
+        } else {
+            if (!inside)
+                return 0;
+            if (need)
+                need(ctx, ijk[0], ijk[1]);
+            if (qrt_mask_blocked(mask, ijk))
+                return 0;
         }
         if (axis < 0)
             return 1;
@@ -92,13 +97,20 @@ static int walk(const struct qrt_mask *mask, const double a_deg[3],
 int qrt_motion_free_on_mask(const struct qrt_mask *mask, const double a_deg[3],
                             const double b_deg[3])
 {
-    return walk(mask, a_deg, b_deg, NULL);
+    return walk(mask, NULL, NULL, a_deg, b_deg, NULL);
+}
+
+int qrt_motion_free_on_rows(const struct qrt_mask *mask, qrt_row_need need,
+                            void *ctx, const double a_deg[3],
+                            const double b_deg[3])
+{
+    return walk(mask, need, ctx, a_deg, b_deg, NULL);
 }
 
 void qrt_motion_mark_rows(const struct qrt_mask *mask, const double a_deg[3],
                           const double b_deg[3], uint64_t *rows)
 {
-    (void)walk(mask, a_deg, b_deg, rows);
+    (void)walk(mask, NULL, NULL, a_deg, b_deg, rows);
 }
 
 double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],

@@ -18,6 +18,15 @@ void qrt_motion_delta(const struct qrt_lattice *lat, const double a_deg[3],
 int qrt_motion_free_on_mask(const struct qrt_mask *mask, const double a_deg[3],
                             const double b_deg[3]);
 
+/* Called before a mask row (ia, is) is read, to build it if need be. */
+typedef void (*qrt_row_need)(void *ctx, int ia, int is);
+
+/* qrt_motion_free_on_mask on a mask whose rows are built as they are
+ * read: need(ctx, ia, is) before each row is looked at. */
+int qrt_motion_free_on_rows(const struct qrt_mask *mask, qrt_row_need need,
+                            void *ctx, const double a_deg[3],
+                            const double b_deg[3]);
+
 /* Mark in rows (bit ia * QRT_MAX_NS + is) every mask row that
  * qrt_motion_free_on_mask(mask, a, b) looks at. */
 void qrt_motion_mark_rows(const struct qrt_mask *mask, const double a_deg[3],

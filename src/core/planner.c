@@ -7,6 +7,7 @@
 
 #include "cluster.h"
 #include "geom.h"
+#include "lazy.h"
 #include "motion.h"
 #include "raster.h"
 #include "search.h"
@@ -61,6 +62,9 @@ int qrt_planner_init(struct qrt_planner *pl, const struct qrt_params *params)
     qrt_points_reset(&pl->points, arm_reach(arm) + rmax + params->margin_m);
     pl->mask_stale = 1;
     pl->cells_blocked = 0;
+    pl->lazy = pl->lazy_kept = 0;
+    pl->lazy_clusters = 0;
+    pl->lazy_raster = NULL;
     return QRT_OK;
 }
 
@@ -68,6 +72,7 @@ void qrt_planner_clear_points(struct qrt_planner *pl)
 {
     qrt_points_reset(&pl->points, pl->points.reach_m);
     pl->mask_stale = 1;
+    pl->lazy_kept = 0;
 }
 
 int qrt_planner_add_points(struct qrt_planner *pl, const double *xyz, long n)
@@ -75,14 +80,10 @@ int qrt_planner_add_points(struct qrt_planner *pl, const double *xyz, long n)
     int rc = qrt_points_add(&pl->points, xyz, n);
     if (rc == QRT_OK && n > 0)
         pl->mask_stale = 1;
+    if (n > 0)
+        pl->lazy_kept = 0;
     return rc;
 }
-
-/* Edge of the cubes that group points for the raster: larger groups share
- * more work, but their bounding balls are less often already covered. */
-#ifndef CLUSTER_CELL_M
-#define CLUSTER_CELL_M 0.04
-#endif
 
 struct cluster_ctx {
     const struct qrt_raster *raster;
@@ -108,6 +109,7 @@ static void start_mask(struct qrt_planner *pl)
             for (w = 0; w < QRT_ROW_WORDS; w++)
                 pl->mask.rows[ia][is][w] = 0;
     pl->mask_stale = 1; /* until the whole mask is built */
+    pl->lazy_kept = 0;
 }
 
 int qrt_planner_build_mask_begin(struct qrt_planner *pl)
@@ -134,7 +136,7 @@ static void raster_part(struct qrt_planner *pl, int part, int nparts,
         struct cluster_ctx ctx;
         ctx.raster = &r;
         ctx.pts = (const float(*)[3])pl->points.xyz;
-        qrt_cluster_points(ctx.pts, pl->points.count, CLUSTER_CELL_M,
+        qrt_cluster_points(ctx.pts, pl->points.count, QRT_CLUSTER_CELL_M,
                            QRT_CLUSTER_MAX, scratch, raster_cluster, &ctx);
     } else {
         for (i = 0; i < pl->points.count; i++) {
@@ -182,6 +184,21 @@ static void exact_radii(const struct qrt_planner *pl, double radius[3])
         radius[k] = pl->radius_m[k] + shift;
 }
 
+static void need_row(void *ctx, int ia, int is)
+{
+    qrt_lazy_need((struct qrt_planner *)ctx, ia, is);
+}
+
+/* The mask's proof of a straight motion, on rows built as they are read
+ * while qrt_planner_plan_now runs. */
+static int motion_free(struct qrt_planner *pl, const double a[3],
+                       const double b[3])
+{
+    if (pl->lazy)
+        return qrt_motion_free_on_rows(&pl->mask, need_row, pl, a, b);
+    return qrt_motion_free_on_mask(&pl->mask, a, b);
+}
+
 /* Add node ijk (if inside the lattice, free, new, and reachable from q by
  * a motion proved safe) to ends. */
 static void try_end(struct qrt_planner *pl, const double q[3], int ijk[3],
@@ -198,6 +215,7 @@ static void try_end(struct qrt_planner *pl, const double q[3], int ijk[3],
     for (j = 0; j < 3; j++)
         if (ijk[j] < 0 || ijk[j] >= lat->n[j])
             return;
+    qrt_lazy_need(pl, ijk[0], ijk[1]);
     if (qrt_mask_blocked(&pl->mask, ijk))
         return;
     node = qrt_lattice_index(lat, ijk);
@@ -205,7 +223,7 @@ static void try_end(struct qrt_planner *pl, const double q[3], int ijk[3],
         if (ends->node[j] == node)
             return;
     qrt_lattice_joints(lat, ijk, node_deg);
-    if (!qrt_motion_free_on_mask(&pl->mask, q, node_deg) &&
+    if (!motion_free(pl, q, node_deg) &&
         !qrt_motion_free_exact(&pl->params.arm, radius, &pl->points, lat, q,
                                node_deg, EXACT_MAX_STEPS))
         return;
@@ -284,7 +302,7 @@ static enum end_outcome resolve_end(struct qrt_planner *pl,
     for (i = 0; i < n; i++) {
         const double *s = sols[order[i]];
         /* a free cell proves s free; only near obstacles measure it */
-        if (!qrt_motion_free_on_mask(&pl->mask, s, s) &&
+        if (!motion_free(pl, s, s) &&
             qrt_clearance(&pl->params.arm, radius, &pl->points, s) <= 0.0)
             continue;
         any_free = 1;
@@ -324,7 +342,7 @@ static void route_point(const struct qrt_planner *pl, const double s[3],
 {
     int ijk[3];
     if (i > 0 && i <= len) {
-        qrt_lattice_coords(&pl->mask.lat, pl->heap[i - 1].node, ijk);
+        qrt_lattice_coords(&pl->mask.lat, pl->open.heap[i - 1].node, ijk);
         qrt_lattice_joints(&pl->mask.lat, ijk, out);
         return;
     }
@@ -367,7 +385,7 @@ static int emit_route(struct qrt_planner *pl, const double s[3],
         if (pl->params.simplify)
             for (j = anchor + 2; j <= last; j++) {
                 route_point(pl, s, g, len, j, w);
-                if (!qrt_motion_free_on_mask(&pl->mask, a, w))
+                if (!motion_free(pl, a, w))
                     break;
                 next = j;
             }
@@ -452,6 +470,23 @@ static enum qrt_plan_status end_status(enum end_outcome o, int is_goal)
     return is_goal ? QRT_STATUS_GOAL_BLOCKED : QRT_STATUS_START_BLOCKED;
 }
 
+/* The rows in pl->check_rows, from clusters kept for a later
+ * qrt_planner_plan_now (0: they do not fit, nothing built). */
+static int rows_from_clusters(struct qrt_planner *pl)
+{
+    struct qrt_raster r;
+    qrt_raster_setup(&r, &pl->mask, &pl->params.arm, pl->radius_m,
+                     pl->params.cspace_margin_deg, 0, 1);
+    if (!qrt_lazy_begin(pl, &r)) {
+        qrt_lazy_end(pl);
+        return 0;
+    }
+    qrt_lazy_build_rows(pl, pl->check_rows);
+    qrt_lazy_end(pl);
+    pl->lazy_kept = 1;
+    return 1;
+}
+
 /* Only the mask rows the motions between consecutive waypoints pass
  * through (the walk that tests a motion marks them, so exactly those). The
  * mask is partial, hence stale, from here on. */
@@ -465,7 +500,8 @@ static void build_rows_along(struct qrt_planner *pl,
         qrt_motion_mark_rows(&pl->mask, waypoints_deg[i], waypoints_deg[i + 1],
                              pl->check_rows);
     start_mask(pl);
-    raster_part(pl, 0, 1, pl->check_rows);
+    if (!rows_from_clusters(pl))
+        raster_part(pl, 0, 1, pl->check_rows);
 }
 
 int qrt_planner_plan_straight(struct qrt_planner *pl,
@@ -486,7 +522,7 @@ int qrt_planner_plan_straight(struct qrt_planner *pl,
     /* the rows the straight motion passes through, and the same mask walk
      * that qrt_planner_plan's own straight-motion test makes on them */
     build_rows_along(pl, (const double(*)[3])wp, 2);
-    if (!qrt_motion_free_on_mask(&pl->mask, wp[0], wp[1]))
+    if (!motion_free(pl, wp[0], wp[1]))
         return 0;
     reset_plan(pl, plan);
     plan->cells_blocked = -1; /* the whole mask was never built */
@@ -499,8 +535,10 @@ int qrt_planner_plan_straight(struct qrt_planner *pl,
     return 1;
 }
 
-int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
-                     const struct qrt_target *goal, struct qrt_plan *plan)
+/* qrt_planner_plan on valid targets and a mask that is built, or being
+ * built as it is read. */
+static void plan_on_mask(struct qrt_planner *pl, const struct qrt_target *start,
+                         const struct qrt_target *goal, struct qrt_plan *plan)
 {
     static const double origin[3] = {0.0, 0.0, 0.0};
     struct qrt_ends seeds, goals;
@@ -509,18 +547,12 @@ int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
     const double *ref;
     double qs[3], qg[3];
     long len;
-    int rc;
 
-    if ((rc = check_target(&pl->params.arm, start)) != QRT_OK ||
-        (rc = check_target(&pl->params.arm, goal)) != QRT_OK)
-        return rc;
-    if (pl->mask_stale)
-        return QRT_E_INVALID;
     reset_plan(pl, plan);
     if (pl->points.dropped > 0) {
         set_status(plan, QRT_STATUS_CAPACITY,
                    "more obstacle points than the point table holds");
-        return QRT_OK;
+        return;
     }
     ref = goal->kind == QRT_TARGET_JOINTS ? goal->value : origin;
     o = resolve_end(pl, start, ref, qs, &seeds);
@@ -528,48 +560,103 @@ int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
         copy_joints(plan->start_deg, qs);
     if (o != END_OK) {
         set_status(plan, end_status(o, 0), end_detail(o, 0));
-        return QRT_OK;
+        return;
     }
     o = resolve_end(pl, goal, qs, qg, &goals);
     if (o != END_UNREACHABLE)
         copy_joints(plan->goal_deg, qg);
     if (o != END_OK) {
         set_status(plan, end_status(o, 1), end_detail(o, 1));
-        return QRT_OK;
+        return;
     }
 
     /* replanning in open space: when the straight motion is proved free,
      * it is the shortest path and no search is needed */
-    if (pl->params.simplify && qrt_motion_free_on_mask(&pl->mask, qs, qg)) {
+    if (pl->params.simplify && motion_free(pl, qs, qg)) {
         plan->n_waypoints = 0;
         append_waypoint(pl, plan, qs, 0);
         append_waypoint(pl, plan, qg, 1);
         plan->cost_deg = plan->lattice_cost_deg = route_cost(pl, plan);
         set_status(plan, QRT_STATUS_OK, "straight motion is free");
-        return QRT_OK;
+        return;
     }
     qrt_search(pl, &seeds, &goals, pl->params.use_astar, &res);
     plan->nodes_expanded = res.expanded;
     if (!res.found) {
         set_status(plan, QRT_STATUS_NO_PATH,
                    "no collision-free path through the lattice");
-        return QRT_OK;
+        return;
     }
     len = qrt_search_path(pl, res.goal_node);
     /* the search adds float costs; the route's length in double is what
      * the simplified path is compared with */
     plan->lattice_cost_deg = route_length(pl, qs, qg, len);
     plan->lattice_path_nodes = len;
-    plan->start_node = pl->heap[0].node;
+    plan->start_node = pl->open.heap[0].node;
     plan->goal_node = res.goal_node;
     if (!emit_route(pl, qs, qg, len, plan)) {
         plan->n_waypoints = 0;
         set_status(plan, QRT_STATUS_CAPACITY,
                    "the path has more waypoints than the plan table holds");
-        return QRT_OK;
+        return;
     }
     plan->cost_deg = route_cost(pl, plan);
     set_status(plan, QRT_STATUS_OK, "path found");
+}
+
+int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
+                     const struct qrt_target *goal, struct qrt_plan *plan)
+{
+    int rc;
+    if ((rc = check_target(&pl->params.arm, start)) != QRT_OK ||
+        (rc = check_target(&pl->params.arm, goal)) != QRT_OK)
+        return rc;
+    if (pl->mask_stale)
+        return QRT_E_INVALID;
+    plan_on_mask(pl, start, goal, plan);
+    return QRT_OK;
+}
+
+/* plan_on_mask with the rows built as they are read; 0 (nothing done)
+ * when the clusters do not fit beside the heap. */
+static int plan_lazily(struct qrt_planner *pl, const struct qrt_target *start,
+                       const struct qrt_target *goal, struct qrt_plan *plan)
+{
+    struct qrt_raster r;
+    int kept = pl->lazy_kept;
+    if (!kept)
+        start_mask(pl);
+    qrt_raster_setup(&r, &pl->mask, &pl->params.arm, pl->radius_m,
+                     pl->params.cspace_margin_deg, 0, 1);
+    if (kept) { /* the same points: go on from the rows already built */
+        qrt_lazy_resume(pl, &r);
+    } else if (!qrt_lazy_begin(pl, &r)) {
+        qrt_lazy_end(pl);
+        return 0;
+    }
+    pl->cells_blocked = -1; /* the whole mask is not built */
+    plan_on_mask(pl, start, goal, plan);
+    if (qrt_lazy_end(pl)) { /* the heap needed the clusters' room */
+        pl->cells_blocked = qrt_mask_count_blocked(&pl->mask);
+        plan->cells_blocked = pl->cells_blocked;
+        pl->mask_stale = 0;
+    } else {
+        pl->lazy_kept = 1;
+    }
+    return 1;
+}
+
+int qrt_planner_plan_now(struct qrt_planner *pl, const struct qrt_target *start,
+                         const struct qrt_target *goal, struct qrt_plan *plan)
+{
+    int rc;
+    if ((rc = check_target(&pl->params.arm, start)) != QRT_OK ||
+        (rc = check_target(&pl->params.arm, goal)) != QRT_OK)
+        return rc;
+    if (!plan_lazily(pl, start, goal, plan)) {
+        qrt_planner_build_mask(pl);
+        plan_on_mask(pl, start, goal, plan);
+    }
     return QRT_OK;
 }
 

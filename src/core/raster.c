@@ -123,6 +123,7 @@ static int angle_ranges(const struct qrt_axis *ax, double centre, double half,
 static int owns(const struct qrt_raster *r, int ia)
 {
     return (r->nparts <= 1 || ia % r->nparts == r->part) &&
+           (r->only_alpha < 0 || ia == r->only_alpha) &&
            (!r->only_rows || r->alpha_wanted[ia]);
 }
 
@@ -130,6 +131,8 @@ static int owns(const struct qrt_raster *r, int ia)
 static int wanted(const struct qrt_raster *r, int ia, int is)
 {
     long bit = (long)ia * QRT_MAX_NS + is;
+    if (r->only_alpha >= 0)
+        return ia == r->only_alpha && is >= r->only_s0 && is < r->only_s1;
     return !r->only_rows || ((r->only_rows[bit >> 6] >> (bit & 63)) & 1U);
 }
 
@@ -152,6 +155,8 @@ void qrt_raster_setup(struct qrt_raster *r, struct qrt_mask *mask,
     r->part = part;
     r->nparts = nparts;
     r->only_rows = NULL;
+    r->only_alpha = -1;
+    r->only_s0 = r->only_s1 = 0;
     r->arm = arm;
     r->mask = mask;
     r->g = lat->grid_deg * QRT_DEG;
@@ -491,13 +496,72 @@ void qrt_raster_point(const struct qrt_raster *r, const double p[3])
 }
 
 /* Every member's plane at alpha node ia (hit2 = hit3 = 0 where none). */
-static void member_planes(const struct qrt_raster *r, int ia, double (*mp)[3],
-                          const double *mrho, int m, struct plane *mpl)
+static void member_planes(const struct qrt_raster *r, int ia,
+                          const float (*pts)[3], const int32_t *members, int m,
+                          struct plane *mpl)
 {
-    int j;
-    for (j = 0; j < m; j++)
-        if (!plane_at(r, ia, mp[j], mrho[j], 0.0, &mpl[j]))
+    int j, k;
+    for (j = 0; j < m; j++) {
+        double p[3], rho;
+        for (k = 0; k < 3; k++)
+            p[k] = pts[members[j]][k];
+        rho = sqrt(p[0] * p[0] + p[1] * p[1]);
+        if (!plane_at(r, ia, p, rho, 0.0, &mpl[j]))
             mpl[j].hit2 = mpl[j].hit3 = 0;
+    }
+}
+
+static void set_alpha_bits(const struct qrt_raster *r, double rho, double phi,
+                           double reach, struct qrt_cluster_geom *g)
+{
+    int ranges[6][2], n, i, ia, w;
+    for (w = 0; w < QRT_ALPHA_WORDS; w++)
+        g->alpha[w] = 0;
+    n = alpha_window(r, rho, phi, reach, ranges);
+    for (i = 0; i < n; i++)
+        for (ia = ranges[i][0]; ia <= ranges[i][1]; ia++)
+            g->alpha[ia >> 6] |= 1ULL << (ia & 63);
+}
+
+void qrt_raster_cluster_prepare(const struct qrt_raster *r,
+                                const float (*pts)[3], const int32_t *members,
+                                int m, struct qrt_cluster_geom *g)
+{
+    double lo[3], hi[3], ball = 0.0;
+    int j, k;
+    g->m = m;
+    g->ball = 0.0;
+    for (k = 0; k < 3; k++)
+        lo[k] = hi[k] = pts[members[0]][k];
+    for (j = 0; j < m; j++) {
+        double p[3];
+        for (k = 0; k < 3; k++) {
+            p[k] = pts[members[j]][k];
+            lo[k] = p[k] < lo[k] ? p[k] : lo[k];
+            hi[k] = p[k] > hi[k] ? p[k] : hi[k];
+        }
+        raster_link1(r, sqrt(p[0] * p[0] + p[1] * p[1]), p);
+    }
+    for (k = 0; k < 3; k++)
+        g->c[k] = 0.5 * (lo[k] + hi[k]);
+    g->rho = sqrt(g->c[0] * g->c[0] + g->c[1] * g->c[1]);
+    if (m == 1) { /* the point itself, as qrt_raster_point takes it */
+        set_alpha_bits(r, g->rho, atan2(g->c[1], g->c[0]), max_plane_radius(r),
+                       g);
+        return;
+    }
+    for (j = 0; j < m; j++) {
+        double d2 = 0.0;
+        for (k = 0; k < 3; k++) {
+            double e = pts[members[j]][k] - g->c[k];
+            d2 += e * e;
+        }
+        if (d2 > ball)
+            ball = d2;
+    }
+    g->ball = sqrt(ball) * (1.0 + 1e-12) + 1e-12;
+    set_alpha_bits(r, g->rho, atan2(g->c[1], g->c[0]),
+                   max_plane_radius(r) + g->ball, g);
 }
 
 /* A cluster of nearby points shares the link-3 work. Its bounding ball
@@ -508,105 +572,96 @@ static void member_planes(const struct qrt_raster *r, int ia, double (*mp)[3],
  * that row; otherwise each member is rastered on the row as usual. Dense
  * clouds block each cell hundreds of times over, so most rows are skipped.
  */
+void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
+                           const int32_t *members,
+                           const struct qrt_cluster_geom *g, int ia)
+{
+    struct plane mpl[QRT_CLUSTER_MAX], cpl;
+    unsigned char full[QRT_MAX_NS];
+    int rows[3][2], nrows, is, j, k, m = g->m, planes_ready = 0;
+    if (!owns(r, ia) || !((g->alpha[ia >> 6] >> (ia & 63)) & 1U))
+        return;
+    if (m == 1) {
+        raster_plane(r, ia, g->rho, g->c);
+        return;
+    }
+    if (!plane_at(r, ia, g->c, g->rho, g->ball, &cpl))
+        return; /* no member can touch links 2 or 3 here */
+    for (is = 0; is < r->mask->lat.n[1]; is++)
+        full[is] = 0;
+    /* link 2: members only where the ball's rows are not all full */
+    nrows = link2_rows(r, &cpl, rows);
+    if (nrows > 0 && !rows_full(r, ia, rows, nrows)) {
+        member_planes(r, ia, pts, members, m, mpl);
+        planes_ready = 1;
+        for (j = 0; j < m; j++)
+            raster_link2(r, ia, &mpl[j], full);
+    }
+    nrows = link3_rows(r, &cpl, rows);
+    for (k = 0; k < nrows; k++) {
+        int first = rows[k][0], last = rows[k][1];
+        if (r->only_alpha >= 0) { /* a block of rows: only those */
+            first = first > r->only_s0 ? first : r->only_s0;
+            last = last < r->only_s1 - 1 ? last : r->only_s1 - 1;
+        }
+        for (is = first; is <= last; is++) {
+            uint64_t *row = r->mask->rows[ia][is];
+            int cr[3][2], nc, a, b;
+            if (full[is] || !wanted(r, ia, is))
+                continue;
+            nc = link3_row_ranges(r, is, &cpl, cr);
+            if (nc == 0)
+                continue;
+            if (!open_nodes(row, cr, nc, &a, &b))
+                continue;
+            if (!planes_ready) {
+                member_planes(r, ia, pts, members, m, mpl);
+                planes_ready = 1;
+            }
+            if (r->sector_ok && b - a < SECTOR_SPAN_MAX) {
+                /* a few nodes at the edge of what is blocked: no member
+                 * can truly block one outside the ball's range, so only
+                 * these are asked of each member */
+                int ie;
+                for (j = 0; j < m; j++)
+                    for (ie = a; mpl[j].hit3 && ie <= b; ie++)
+                        if (!bit_set(row, ie) &&
+                            sector_hits(r, is, ie, &mpl[j]))
+                            row[ie >> 6] |= 1ULL << (ie & 63);
+                continue;
+            }
+            for (j = 0; j < m; j++) {
+                int mr[3][2], nm;
+                if (!mpl[j].hit3)
+                    continue;
+                nm = link3_row_ranges(r, is, &mpl[j], mr);
+                mark_ranges(row, mr, nm);
+            }
+        }
+    }
+}
+
 void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
                         const int32_t *members, int m)
 {
-    double c[3], lo[3], hi[3], ball = 0.0, rho_c, phi_c;
-    double mp[QRT_CLUSTER_MAX][3], mrho[QRT_CLUSTER_MAX];
-    struct plane mpl[QRT_CLUSTER_MAX];
-    int ranges[6][2], n, i, j, k, ia;
-
+    struct qrt_cluster_geom g;
+    int j, k, ia;
     if (m > QRT_CLUSTER_MAX) {
         /* the clusterer never emits more, but every point must still count */
         for (j = 0; j < m; j++) {
+            double p[3];
             for (k = 0; k < 3; k++)
-                c[k] = pts[members[j]][k];
-            qrt_raster_point(r, c);
+                p[k] = pts[members[j]][k];
+            qrt_raster_point(r, p);
         }
         return;
     }
     if (m < 1)
         return;
-    for (k = 0; k < 3; k++)
-        lo[k] = hi[k] = pts[members[0]][k];
-    for (j = 0; j < m; j++) {
-        for (k = 0; k < 3; k++) {
-            mp[j][k] = pts[members[j]][k];
-            lo[k] = mp[j][k] < lo[k] ? mp[j][k] : lo[k];
-            hi[k] = mp[j][k] > hi[k] ? mp[j][k] : hi[k];
-        }
-        mrho[j] = sqrt(mp[j][0] * mp[j][0] + mp[j][1] * mp[j][1]);
-        raster_link1(r, mrho[j], mp[j]);
-    }
-    if (m == 1) {
-        raster_planes(r, mp[0], mrho[0], atan2(mp[0][1], mp[0][0]));
-        return;
-    }
-    for (k = 0; k < 3; k++)
-        c[k] = 0.5 * (lo[k] + hi[k]);
-    for (j = 0; j < m; j++) {
-        double d2 = 0.0;
-        for (k = 0; k < 3; k++)
-            d2 += (mp[j][k] - c[k]) * (mp[j][k] - c[k]);
-        if (d2 > ball)
-            ball = d2;
-    }
-    ball = sqrt(ball) * (1.0 + 1e-12) + 1e-12;
-    rho_c = sqrt(c[0] * c[0] + c[1] * c[1]);
-    phi_c = atan2(c[1], c[0]);
-    n = alpha_window(r, rho_c, phi_c, max_plane_radius(r) + ball, ranges);
-    for (i = 0; i < n; i++)
-        for (ia = ranges[i][0]; ia <= ranges[i][1]; ia++) {
-            unsigned char full[QRT_MAX_NS] = {0};
-            struct plane cpl;
-            int rows[3][2], nrows, is, planes_ready = 0;
-            if (!owns(r, ia) || !plane_at(r, ia, c, rho_c, ball, &cpl))
-                continue; /* no member can touch links 2 or 3 here */
-            /* link 2: members only where the ball's rows are not all full */
-            nrows = link2_rows(r, &cpl, rows);
-            if (nrows > 0 && !rows_full(r, ia, rows, nrows)) {
-                member_planes(r, ia, mp, mrho, m, mpl);
-                planes_ready = 1;
-                for (j = 0; j < m; j++)
-                    raster_link2(r, ia, &mpl[j], full);
-            }
-            nrows = link3_rows(r, &cpl, rows);
-            for (k = 0; k < nrows; k++)
-                for (is = rows[k][0]; is <= rows[k][1]; is++) {
-                    uint64_t *row = r->mask->rows[ia][is];
-                    int cr[3][2], nc, a, b;
-                    if (full[is] || !wanted(r, ia, is))
-                        continue;
-                    nc = link3_row_ranges(r, is, &cpl, cr);
-                    if (nc == 0)
-                        continue;
-                    if (!open_nodes(row, cr, nc, &a, &b))
-                        continue;
-                    if (!planes_ready) {
-                        member_planes(r, ia, mp, mrho, m, mpl);
-                        planes_ready = 1;
-                    }
-                    if (r->sector_ok && b - a < SECTOR_SPAN_MAX) {
-                        /* a few nodes at the edge of what is blocked: no
-                         * member can truly block one outside the ball's
-                         * range, so only these are asked of each member */
-                        int ie;
-                        for (j = 0; j < m; j++)
-                            for (ie = a; mpl[j].hit3 && ie <= b; ie++)
-                                if (!bit_set(row, ie) &&
-                                    sector_hits(r, is, ie, &mpl[j]))
-                                    row[ie >> 6] |= 1ULL << (ie & 63);
-                        continue;
-                    }
-                    for (j = 0; j < m; j++) {
-                        int mr[3][2], nm;
-                        if (!mpl[j].hit3)
-                            continue;
-                        nm = link3_row_ranges(r, is, &mpl[j], mr);
-                        mark_ranges(row, mr, nm);
-                    }
-                }
-        }
+    qrt_raster_cluster_prepare(r, pts, members, m, &g);
+    for (ia = 0; ia < r->mask->lat.n[0]; ia++)
+        if ((g.alpha[ia >> 6] >> (ia & 63)) & 1U)
+            qrt_raster_cluster_at(r, pts, members, &g, ia);
 }
 
 void qrt_raster_only_rows(struct qrt_raster *r, const uint64_t *rows)
@@ -615,8 +670,15 @@ void qrt_raster_only_rows(struct qrt_raster *r, const uint64_t *rows)
     r->only_rows = rows;
     for (ia = 0; ia < r->mask->lat.n[0]; ia++) {
         r->alpha_wanted[ia] = 0;
-        for (is = 0; is < r->mask->lat.n[1]; is++)
+        for (is = 0; is < r->mask->lat.n[1] && !r->alpha_wanted[ia]; is++)
             if (wanted(r, ia, is))
                 r->alpha_wanted[ia] = 1;
     }
+}
+
+void qrt_raster_only_block(struct qrt_raster *r, int ia, int s0, int s1)
+{
+    r->only_alpha = ia;
+    r->only_s0 = s0;
+    r->only_s1 = s1;
 }

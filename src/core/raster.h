@@ -7,6 +7,7 @@
 
 #include "qrtplan/arm.h"
 #include "qrtplan/lattice.h"
+#include "qrtplan/planner.h"
 
 /* One lattice axis, in radians. */
 struct qrt_axis {
@@ -37,6 +38,8 @@ struct qrt_raster {
     /* NULL, or the only rows to raster (bit ia * QRT_MAX_NS + is); other
      * rows may be left partly written */
     const uint64_t *only_rows;
+    /* >= 0: the only rows to raster are (only_alpha, only_s0 .. only_s1 - 1) */
+    int only_alpha, only_s0, only_s1;
     unsigned char alpha_wanted[QRT_MAX_NA]; /* with only_rows: any row */
     double sector_eps;
     int sector_ok;
@@ -60,8 +63,12 @@ void qrt_raster_setup(struct qrt_raster *r, struct qrt_mask *mask,
 
 /* Raster from now on only the rows in rows (bit ia * QRT_MAX_NS + is),
  * which must stay valid while this raster is used: the others are not
- * computed, and may be left partly written. */
+ * computed, and may be left partly written. NULL: every row again. */
 void qrt_raster_only_rows(struct qrt_raster *r, const uint64_t *rows);
+
+/* Raster from now on only the rows (ia, s0 .. s1 - 1); the others are not
+ * computed, and may be left partly written. */
+void qrt_raster_only_block(struct qrt_raster *r, int ia, int s0, int s1);
 
 /* Mark every node whose cell box holds a configuration that collides with
  * point p (metres). */
@@ -76,5 +83,17 @@ void qrt_raster_point(const struct qrt_raster *r, const double p[3]);
  * blocks, and a subset of what rastering them one by one blocks. */
 void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
                         const int32_t *members, int m);
+
+/* qrt_raster_cluster in two steps, so that a cluster can be rastered one
+ * alpha node at a time: _prepare rasters the members' link 1 and fills *g
+ * (bounding ball, and the alpha nodes whose boxes it may touch); _at
+ * rasters links 2 and 3 at alpha node ia. _prepare, then _at on every
+ * alpha node, is qrt_raster_cluster. 1 <= m <= QRT_CLUSTER_MAX. */
+void qrt_raster_cluster_prepare(const struct qrt_raster *r,
+                                const float (*pts)[3], const int32_t *members,
+                                int m, struct qrt_cluster_geom *g);
+void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
+                           const int32_t *members,
+                           const struct qrt_cluster_geom *g, int ia);
 
 #endif

@@ -9,6 +9,7 @@
 #include <math.h>
 
 #include "geom.h"
+#include "lazy.h"
 
 void qrt_search_direction(int dir, int offset[3])
 {
@@ -27,18 +28,18 @@ static int heap_less(const struct qrt_heap_entry *a,
 
 static void heap_place(struct qrt_planner *pl, long i, struct qrt_heap_entry e)
 {
-    pl->heap[i] = e;
+    pl->open.heap[i] = e;
     pl->heap_pos[e.node] = (int32_t)i;
 }
 
 static void sift_up(struct qrt_planner *pl, long i)
 {
-    struct qrt_heap_entry e = pl->heap[i];
+    struct qrt_heap_entry e = pl->open.heap[i];
     while (i > 0) {
         long parent = (i - 1) / 2;
-        if (!heap_less(&e, &pl->heap[parent]))
+        if (!heap_less(&e, &pl->open.heap[parent]))
             break;
-        heap_place(pl, i, pl->heap[parent]);
+        heap_place(pl, i, pl->open.heap[parent]);
         i = parent;
     }
     heap_place(pl, i, e);
@@ -46,16 +47,16 @@ static void sift_up(struct qrt_planner *pl, long i)
 
 static void sift_down(struct qrt_planner *pl, long i, long size)
 {
-    struct qrt_heap_entry e = pl->heap[i];
+    struct qrt_heap_entry e = pl->open.heap[i];
     for (;;) {
         long c = 2 * i + 1;
         if (c >= size)
             break;
-        if (c + 1 < size && heap_less(&pl->heap[c + 1], &pl->heap[c]))
+        if (c + 1 < size && heap_less(&pl->open.heap[c + 1], &pl->open.heap[c]))
             c++;
-        if (!heap_less(&pl->heap[c], &e))
+        if (!heap_less(&pl->open.heap[c], &e))
             break;
-        heap_place(pl, i, pl->heap[c]);
+        heap_place(pl, i, pl->open.heap[c]);
         i = c;
     }
     heap_place(pl, i, e);
@@ -70,10 +71,14 @@ static void push_or_lower(struct qrt_planner *pl, long *size, long node,
     e.key = key;
     e.node = (int32_t)node;
     if (pl->heap_pos[node] >= 0) {
-        pl->heap[pl->heap_pos[node]] = e;
+        pl->open.heap[pl->heap_pos[node]] = e;
         sift_up(pl, pl->heap_pos[node]);
     } else {
-        pl->heap[*size] = e;
+        /* the lazily built mask keeps its clusters in the heap's tail:
+         * finish the mask before the heap grows into them */
+        if (pl->lazy && *size >= QRT_LAZY_HEAP)
+            qrt_lazy_finish(pl);
+        pl->open.heap[*size] = e;
         sift_up(pl, (*size)++);
     }
 }
@@ -196,6 +201,8 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
             (offsets[d][0] != 0) + (offsets[d][1] != 0) + (offsets[d][2] != 0);
         dir_cost[d] = (float)(lat->grid_deg * sqrt((double)moved));
     }
+    if (!pl->lazy)
+        pl->lazy_kept = 0; /* the heap may use the whole array */
     init_estimate(&est, lat, goals, use_astar);
     for (i = 0; i < n_nodes; i++)
         pl->heap_pos[i] = -1;
@@ -217,7 +224,7 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
     }
 
     while (size > 0) {
-        struct qrt_heap_entry top = pl->heap[0];
+        struct qrt_heap_entry top = pl->open.heap[0];
         long u = top.node;
         int ijk[3], slot;
         if ((double)top.key >= best)
@@ -225,7 +232,7 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
         pl->heap_pos[u] = -2;
         size--;
         if (size > 0) {
-            pl->heap[0] = pl->heap[size];
+            pl->open.heap[0] = pl->open.heap[size];
             sift_down(pl, 0, size);
         }
         res->expanded++;
@@ -242,8 +249,10 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
             int nb[3];
             long v = neighbour(lat, ijk, offsets[d], nb);
             float g;
-            if (v < 0 || pl->heap_pos[v] == -2 ||
-                qrt_mask_blocked(&pl->mask, nb))
+            if (v < 0 || pl->heap_pos[v] == -2)
+                continue;
+            qrt_lazy_need(pl, nb[0], nb[1]);
+            if (qrt_mask_blocked(&pl->mask, nb))
                 continue;
             g = pl->search.dist[u] + dir_cost[d];
             if (pl->heap_pos[v] >= 0 && pl->search.dist[v] <= g)
@@ -264,7 +273,9 @@ long qrt_search_path(struct qrt_planner *pl, long goal_node)
     for (;;) {
         int ijk[3], off[3], prev[3], j;
         unsigned dir = pl->parent_dir[node];
-        pl->heap[len++].node = (int32_t)node;
+        if (pl->lazy && len >= QRT_LAZY_HEAP)
+            qrt_lazy_finish(pl); /* as in push_or_lower */
+        pl->open.heap[len++].node = (int32_t)node;
         if (dir == QRT_NO_PARENT)
             break;
         qrt_lattice_coords(lat, node, ijk);
@@ -276,9 +287,9 @@ long qrt_search_path(struct qrt_planner *pl, long goal_node)
         node = qrt_lattice_index(lat, prev);
     }
     for (i = 0; i < len / 2; i++) {
-        int32_t t = pl->heap[i].node;
-        pl->heap[i].node = pl->heap[len - 1 - i].node;
-        pl->heap[len - 1 - i].node = t;
+        int32_t t = pl->open.heap[i].node;
+        pl->open.heap[i].node = pl->open.heap[len - 1 - i].node;
+        pl->open.heap[len - 1 - i].node = t;
     }
     return len;
 }

@@ -29,7 +29,7 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
                 struct qrt_search_result *res);
 
 /* Write the node path ending at goal_node (seed first) into
- * pl->heap[i].node; returns its length. */
+ * pl->open.heap[i].node; returns its length. */
 long qrt_search_path(struct qrt_planner *pl, long goal_node);
 
 /* Offset of neighbour direction dir (0..25) on each axis: -1, 0 or 1. */

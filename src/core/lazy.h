@@ -1,0 +1,49 @@
+/* Mask rows built as they are read, for qrt_planner_plan_now. Internal.
+ *
+ * The points are clustered once (qrt_lazy_begin) and the clusters kept in
+ * the tail of the heap array; a row is built the first time it is read,
+ * together with the rest of its block of LAZY_BLOCK_ROWS sigma rows, from
+ * every cluster that may block its alpha node, in the order a whole build
+ * takes them. A row's bits depend only on the operations on that row, in
+ * that order (raster.h), so each row comes out bit for bit as
+ * qrt_planner_build_mask makes it. */
+#ifndef QRT_CORE_LAZY_H
+#define QRT_CORE_LAZY_H
+
+#include "qrtplan/planner.h"
+
+/* Clear the mask and cluster the points into pl->open.lazy, with r (set
+ * up for the mask, owned by the caller until qrt_lazy_end). Returns 1 with
+ * pl->lazy set, or 0 (too many clusters, or no scratch for clustering):
+ * then build the whole mask instead. */
+int qrt_lazy_begin(struct qrt_planner *pl, struct qrt_raster *r);
+
+/* Build the block holding row (ia, is). */
+void qrt_lazy_build(struct qrt_planner *pl, int ia, int is);
+
+/* Row (ia, is) built, if rows are being built as they are read. */
+static inline void qrt_lazy_need(struct qrt_planner *pl, int ia, int is)
+{
+    long bit = (long)ia * QRT_MAX_NS + is;
+    if (pl->lazy && !((pl->rows_ready[bit >> 6] >> (bit & 63)) & 1U))
+        qrt_lazy_build(pl, ia, is);
+}
+
+/* Build the rows in rows (bit ia * QRT_MAX_NS + is; NULL: every row) that
+ * are not built yet. */
+void qrt_lazy_build_rows(struct qrt_planner *pl, const uint64_t *rows);
+
+/* Build every row not built yet and give the clusters up (the heap may
+ * then use the whole array). The mask is whole afterwards. */
+void qrt_lazy_finish(struct qrt_planner *pl);
+
+/* Stop building rows; returns whether the mask is whole. The clusters and
+ * the rows built stay in place: pl->lazy_kept says whether a later
+ * qrt_lazy_resume may take them up again (the caller sets it). */
+int qrt_lazy_end(struct qrt_planner *pl);
+
+/* Build rows as they are read again, from the clusters and rows kept by
+ * the last qrt_lazy_end, with r set up as for qrt_lazy_begin. */
+void qrt_lazy_resume(struct qrt_planner *pl, struct qrt_raster *r);
+
+#endif
