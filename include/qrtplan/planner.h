@@ -82,16 +82,18 @@ struct qrt_cluster_geom {
 };
 
 /* The clusters qrt_planner_plan_now keeps while it searches, in the tail of
- * the heap array: at most 5 bytes of every 8 (QRT_LAZY_HEAP entries stay
+ * the heap array: at most 11 bytes of every 16 (QRT_LAZY_HEAP entries stay
  * for the heap; should it need more, the rest of the mask is built and the
  * clusters given up). More clusters or points than this: the whole mask is
  * built first instead. */
 #define QRT_LAZY_MAX_CLUSTERS                                                  \
     (QRT_MAX_POINTS < QRT_MAX_NODES / 16 ? QRT_MAX_POINTS : QRT_MAX_NODES / 16)
 #define QRT_LAZY_MAX_POINTS                                                    \
-    (QRT_MAX_POINTS < QRT_MAX_NODES / 4 ? QRT_MAX_POINTS : QRT_MAX_NODES / 4)
+    (QRT_MAX_POINTS < QRT_MAX_NODES / 8 ? QRT_MAX_POINTS : QRT_MAX_NODES / 8)
 struct qrt_lazy_clusters {
     struct qrt_cluster_geom geom[QRT_LAZY_MAX_CLUSTERS];
+    double member_rho[QRT_LAZY_MAX_POINTS]; /* each member's distance from
+                                               the base axis */
     int32_t members[QRT_LAZY_MAX_POINTS];
 };
 #define QRT_LAZY_HEAP                                                          \
@@ -174,7 +176,14 @@ int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
  * connections and the shortcuts read them. plan->cells_blocked is -1 (the
  * whole mask was not built), and the mask is left partial: a later
  * qrt_planner_plan or qrt_planner_check_path needs qrt_planner_build_mask
- * first. Same return codes as qrt_planner_plan, without the stale mask. */
+ * first. Same return codes as qrt_planner_plan, without the stale mask.
+ *
+ * The rows it builds, and those qrt_planner_check_path_now and
+ * qrt_planner_plan_straight build, are kept with the points' clusters
+ * until the points change (or a whole mask or plain qrt_planner_plan needs
+ * the room): each of these three calls on the same points goes on from
+ * what the last one built, so a replan may check the path being executed
+ * and plan anew, in either order, for little more than the plan. */
 int qrt_planner_plan_now(struct qrt_planner *pl, const struct qrt_target *start,
                          const struct qrt_target *goal, struct qrt_plan *plan);
 

@@ -34,7 +34,7 @@ static void keep_cluster(void *ctx, const int32_t *members, int m)
     }
     g = &c->geom[k->pl->lazy_clusters++];
     qrt_raster_cluster_prepare(k->r, (const float(*)[3])k->pl->points.xyz,
-                               members, m, g);
+                               members, m, g, c->member_rho + k->members);
     g->first = (int32_t)k->members;
     for (j = 0; j < m; j++)
         c->members[k->members++] = members[j];
@@ -83,7 +83,7 @@ static void raster_alpha(struct qrt_planner *pl, int ia)
         const struct qrt_cluster_geom *g = &c->geom[i];
         if ((g->alpha[ia >> 6] >> (ia & 63)) & 1U)
             qrt_raster_cluster_at(pl->lazy_raster, pts, c->members + g->first,
-                                  g, ia);
+                                  c->member_rho + g->first, g, ia);
     }
 }
 

@@ -470,14 +470,17 @@ static enum qrt_plan_status end_status(enum end_outcome o, int is_goal)
     return is_goal ? QRT_STATUS_GOAL_BLOCKED : QRT_STATUS_START_BLOCKED;
 }
 
-/* The rows in pl->check_rows, from clusters kept for a later
+/* The rows in pl->check_rows, from the clusters kept by the last call on
+ * these points (kept) or from new ones, which are kept for a later
  * qrt_planner_plan_now (0: they do not fit, nothing built). */
-static int rows_from_clusters(struct qrt_planner *pl)
+static int rows_from_clusters(struct qrt_planner *pl, int kept)
 {
     struct qrt_raster r;
     qrt_raster_setup(&r, &pl->mask, &pl->params.arm, pl->radius_m,
                      pl->params.cspace_margin_deg, 0, 1);
-    if (!qrt_lazy_begin(pl, &r)) {
+    if (kept) {
+        qrt_lazy_resume(pl, &r);
+    } else if (!qrt_lazy_begin(pl, &r)) {
         qrt_lazy_end(pl);
         return 0;
     }
@@ -488,8 +491,9 @@ static int rows_from_clusters(struct qrt_planner *pl)
 }
 
 /* Only the mask rows the motions between consecutive waypoints pass
- * through (the walk that tests a motion marks them, so exactly those). The
- * mask is partial, hence stale, from here on. */
+ * through (the walk that tests a motion marks them, so exactly those),
+ * besides any kept from the last call on these points. The mask is
+ * partial, hence stale, from here on. */
 static void build_rows_along(struct qrt_planner *pl,
                              const double (*waypoints_deg)[3], int n)
 {
@@ -499,8 +503,12 @@ static void build_rows_along(struct qrt_planner *pl,
     for (i = 0; i + 1 < n; i++)
         qrt_motion_mark_rows(&pl->mask, waypoints_deg[i], waypoints_deg[i + 1],
                              pl->check_rows);
+    if (pl->lazy_kept) {
+        rows_from_clusters(pl, 1);
+        return;
+    }
     start_mask(pl);
-    if (!rows_from_clusters(pl))
+    if (!rows_from_clusters(pl, 0))
         raster_part(pl, 0, 1, pl->check_rows);
 }
 

@@ -128,7 +128,7 @@ static int owns(const struct qrt_raster *r, int ia)
 }
 
 /* Is row (ia, is) one this raster must get right? */
-static int wanted(const struct qrt_raster *r, int ia, int is)
+static inline int wanted(const struct qrt_raster *r, int ia, int is)
 {
     long bit = (long)ia * QRT_MAX_NS + is;
     if (r->only_alpha >= 0)
@@ -497,16 +497,15 @@ void qrt_raster_point(const struct qrt_raster *r, const double p[3])
 
 /* Every member's plane at alpha node ia (hit2 = hit3 = 0 where none). */
 static void member_planes(const struct qrt_raster *r, int ia,
-                          const float (*pts)[3], const int32_t *members, int m,
-                          struct plane *mpl)
+                          const float (*pts)[3], const int32_t *members,
+                          const double *mrho, int m, struct plane *mpl)
 {
     int j, k;
     for (j = 0; j < m; j++) {
-        double p[3], rho;
+        double p[3];
         for (k = 0; k < 3; k++)
             p[k] = pts[members[j]][k];
-        rho = sqrt(p[0] * p[0] + p[1] * p[1]);
-        if (!plane_at(r, ia, p, rho, 0.0, &mpl[j]))
+        if (!plane_at(r, ia, p, mrho[j], 0.0, &mpl[j]))
             mpl[j].hit2 = mpl[j].hit3 = 0;
     }
 }
@@ -525,7 +524,7 @@ static void set_alpha_bits(const struct qrt_raster *r, double rho, double phi,
 
 void qrt_raster_cluster_prepare(const struct qrt_raster *r,
                                 const float (*pts)[3], const int32_t *members,
-                                int m, struct qrt_cluster_geom *g)
+                                int m, struct qrt_cluster_geom *g, double *mrho)
 {
     double lo[3], hi[3], ball = 0.0;
     int j, k;
@@ -540,7 +539,8 @@ void qrt_raster_cluster_prepare(const struct qrt_raster *r,
             lo[k] = p[k] < lo[k] ? p[k] : lo[k];
             hi[k] = p[k] > hi[k] ? p[k] : hi[k];
         }
-        raster_link1(r, sqrt(p[0] * p[0] + p[1] * p[1]), p);
+        mrho[j] = sqrt(p[0] * p[0] + p[1] * p[1]);
+        raster_link1(r, mrho[j], p);
     }
     for (k = 0; k < 3; k++)
         g->c[k] = 0.5 * (lo[k] + hi[k]);
@@ -573,7 +573,7 @@ void qrt_raster_cluster_prepare(const struct qrt_raster *r,
  * clouds block each cell hundreds of times over, so most rows are skipped.
  */
 void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
-                           const int32_t *members,
+                           const int32_t *members, const double *mrho,
                            const struct qrt_cluster_geom *g, int ia)
 {
     struct plane mpl[QRT_CLUSTER_MAX], cpl;
@@ -592,7 +592,7 @@ void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
     /* link 2: members only where the ball's rows are not all full */
     nrows = link2_rows(r, &cpl, rows);
     if (nrows > 0 && !rows_full(r, ia, rows, nrows)) {
-        member_planes(r, ia, pts, members, m, mpl);
+        member_planes(r, ia, pts, members, mrho, m, mpl);
         planes_ready = 1;
         for (j = 0; j < m; j++)
             raster_link2(r, ia, &mpl[j], full);
@@ -607,7 +607,8 @@ void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
         for (is = first; is <= last; is++) {
             uint64_t *row = r->mask->rows[ia][is];
             int cr[3][2], nc, a, b;
-            if (full[is] || !wanted(r, ia, is))
+            /* (a block of rows is clipped above) */
+            if (full[is] || (r->only_rows && !wanted(r, ia, is)))
                 continue;
             nc = link3_row_ranges(r, is, &cpl, cr);
             if (nc == 0)
@@ -615,7 +616,7 @@ void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
             if (!open_nodes(row, cr, nc, &a, &b))
                 continue;
             if (!planes_ready) {
-                member_planes(r, ia, pts, members, m, mpl);
+                member_planes(r, ia, pts, members, mrho, m, mpl);
                 planes_ready = 1;
             }
             if (r->sector_ok && b - a < SECTOR_SPAN_MAX) {
@@ -645,6 +646,7 @@ void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
                         const int32_t *members, int m)
 {
     struct qrt_cluster_geom g;
+    double mrho[QRT_CLUSTER_MAX];
     int j, k, ia;
     if (m > QRT_CLUSTER_MAX) {
         /* the clusterer never emits more, but every point must still count */
@@ -658,10 +660,10 @@ void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
     }
     if (m < 1)
         return;
-    qrt_raster_cluster_prepare(r, pts, members, m, &g);
+    qrt_raster_cluster_prepare(r, pts, members, m, &g, mrho);
     for (ia = 0; ia < r->mask->lat.n[0]; ia++)
         if ((g.alpha[ia >> 6] >> (ia & 63)) & 1U)
-            qrt_raster_cluster_at(r, pts, members, &g, ia);
+            qrt_raster_cluster_at(r, pts, members, mrho, &g, ia);
 }
 
 void qrt_raster_only_rows(struct qrt_raster *r, const uint64_t *rows)

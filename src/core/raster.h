@@ -86,14 +86,16 @@ void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
 
 /* qrt_raster_cluster in two steps, so that a cluster can be rastered one
  * alpha node at a time: _prepare rasters the members' link 1 and fills *g
- * (bounding ball, and the alpha nodes whose boxes it may touch); _at
- * rasters links 2 and 3 at alpha node ia. _prepare, then _at on every
- * alpha node, is qrt_raster_cluster. 1 <= m <= QRT_CLUSTER_MAX. */
+ * (bounding ball, and the alpha nodes whose boxes it may touch) and
+ * mrho[0 .. m-1] (each member's distance from the base axis); _at rasters
+ * links 2 and 3 at alpha node ia. _prepare, then _at on every alpha node,
+ * is qrt_raster_cluster. 1 <= m <= QRT_CLUSTER_MAX. */
 void qrt_raster_cluster_prepare(const struct qrt_raster *r,
                                 const float (*pts)[3], const int32_t *members,
-                                int m, struct qrt_cluster_geom *g);
+                                int m, struct qrt_cluster_geom *g,
+                                double *mrho);
 void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
-                           const int32_t *members,
+                           const int32_t *members, const double *mrho,
                            const struct qrt_cluster_geom *g, int ia);
 
 #endif
