@@ -156,12 +156,11 @@ double qrt_clearance(const struct qrt_arm *arm, const double radius_m[3],
 }
 
 /* Advancement on a blocked motion crawls ever closer to the contact, one
- * clearance over all points per step. After WITNESS_AFTER steps it looks
+ * clearance over all points per step. After witness_after steps it looks
  * for a witness instead: a colliding configuration among WITNESS_SAMPLES
  * samples, taken coarse to fine (the far end first, then the middle, the
  * quarters, ...), decides the motion. Advancement could never have passed
  * a colliding configuration, so the answer is the same, only sooner. */
-#define WITNESS_AFTER 4
 #define WITNESS_SAMPLES 32
 
 static int has_witness(const struct qrt_arm *arm, const double radius_m[3],
@@ -183,7 +182,8 @@ static int has_witness(const struct qrt_arm *arm, const double radius_m[3],
 int qrt_motion_free_exact(const struct qrt_arm *arm, const double radius_m[3],
                           const struct qrt_points *pts,
                           const struct qrt_lattice *lat, const double a_deg[3],
-                          const double b_deg[3], int max_steps)
+                          const double b_deg[3], int max_steps,
+                          int witness_after)
 {
     const double *l = arm->link_m;
     double d[3], speed, t = 0.0;
@@ -196,7 +196,7 @@ int qrt_motion_free_exact(const struct qrt_arm *arm, const double radius_m[3],
             QRT_DEG;
     for (step = 0; step < max_steps; step++) {
         double q[3], c;
-        if (step == WITNESS_AFTER && has_witness(arm, radius_m, pts, a_deg, d))
+        if (step == witness_after && has_witness(arm, radius_m, pts, a_deg, d))
             return 0;
         for (j = 0; j < 3; j++)
             q[j] = a_deg[j] + t * d[j];

@@ -225,7 +225,7 @@ static void try_end(struct qrt_planner *pl, const double q[3], int ijk[3],
     qrt_lattice_joints(lat, ijk, node_deg);
     if (!motion_free(pl, q, node_deg) &&
         !qrt_motion_free_exact(&pl->params.arm, radius, &pl->points, lat, q,
-                               node_deg, EXACT_MAX_STEPS))
+                               node_deg, EXACT_MAX_STEPS, QRT_WITNESS_AFTER))
         return;
     ends->node[ends->count] = node;
     ends->cost[ends->count] =
@@ -423,6 +423,18 @@ static double route_cost(const struct qrt_planner *pl,
     return cost;
 }
 
+/* The plan of a straight motion from a to b that has been proved free. */
+static void set_straight_plan(const struct qrt_planner *pl,
+                              struct qrt_plan *plan, const double a[3],
+                              const double b[3])
+{
+    plan->n_waypoints = 0;
+    append_waypoint(pl, plan, a, 0);
+    append_waypoint(pl, plan, b, 1);
+    plan->cost_deg = plan->lattice_cost_deg = route_cost(pl, plan);
+    set_status(plan, QRT_STATUS_OK, "straight motion is free");
+}
+
 static void reset_plan(const struct qrt_planner *pl, struct qrt_plan *plan)
 {
     int k;
@@ -536,10 +548,7 @@ int qrt_planner_plan_straight(struct qrt_planner *pl,
     plan->cells_blocked = -1; /* the whole mask was never built */
     copy_joints(plan->start_deg, wp[0]);
     copy_joints(plan->goal_deg, wp[1]);
-    append_waypoint(pl, plan, wp[0], 0);
-    append_waypoint(pl, plan, wp[1], 1);
-    plan->cost_deg = plan->lattice_cost_deg = route_cost(pl, plan);
-    set_status(plan, QRT_STATUS_OK, "straight motion is free");
+    set_straight_plan(pl, plan, wp[0], wp[1]);
     return 1;
 }
 
@@ -581,11 +590,7 @@ static void plan_on_mask(struct qrt_planner *pl, const struct qrt_target *start,
     /* replanning in open space: when the straight motion is proved free,
      * it is the shortest path and no search is needed */
     if (pl->params.simplify && motion_free(pl, qs, qg)) {
-        plan->n_waypoints = 0;
-        append_waypoint(pl, plan, qs, 0);
-        append_waypoint(pl, plan, qg, 1);
-        plan->cost_deg = plan->lattice_cost_deg = route_cost(pl, plan);
-        set_status(plan, QRT_STATUS_OK, "straight motion is free");
+        set_straight_plan(pl, plan, qs, qg);
         return;
     }
     qrt_search(pl, &seeds, &goals, pl->params.use_astar, &res);
@@ -686,54 +691,102 @@ static int check_waypoints(const struct qrt_planner *pl,
     return QRT_OK;
 }
 
-/* The first segment not proved free on the mask (every row the walk looks
- * at must be built) nor against the points, or -1. */
-static int first_blocked_segment(const struct qrt_planner *pl,
-                                 const double (*waypoints_deg)[3], int n)
+/* Is the motion a -> b proved free neither on the mask (every row the walk
+ * looks at must be built) nor against the points? (The witness search
+ * waits QRT_WITNESS_AFTER steps here too: a path's first and last segments
+ * are often joins that only advancement proves, in a step or two, and a
+ * search of every sample first would cost them 32 clearances.) */
+static int segment_blocked(const struct qrt_planner *pl, const double a[3],
+                           const double b[3])
 {
     double radius[3];
-    int i;
+    if (qrt_motion_free_on_mask(&pl->mask, a, b))
+        return 0;
     exact_radii(pl, radius);
-    for (i = 0; i + 1 < n; i++)
-        if (!qrt_motion_free_on_mask(&pl->mask, waypoints_deg[i],
-                                     waypoints_deg[i + 1]) &&
-            !qrt_motion_free_exact(&pl->params.arm, radius, &pl->points,
-                                   &pl->mask.lat, waypoints_deg[i],
-                                   waypoints_deg[i + 1], EXACT_MAX_STEPS))
-            return i;
-    return -1;
+    return !qrt_motion_free_exact(&pl->params.arm, radius, &pl->points,
+                                  &pl->mask.lat, a, b, EXACT_MAX_STEPS,
+                                  QRT_WITNESS_AFTER);
 }
 
 int qrt_planner_check_path(const struct qrt_planner *pl,
                            const double (*waypoints_deg)[3], int n,
                            int *first_blocked)
 {
-    int rc;
+    int rc, i;
     *first_blocked = -1;
     if (pl->mask_stale)
         return QRT_E_INVALID;
     rc = check_waypoints(pl, waypoints_deg, n);
     if (rc != QRT_OK)
         return rc;
-    /* a cloud that lost points to capacity proves nothing free */
-    *first_blocked = pl->points.dropped > 0
-                         ? 0
-                         : first_blocked_segment(pl, waypoints_deg, n);
+    if (pl->points.dropped > 0) { /* a cloud that lost points proves nothing */
+        *first_blocked = 0;
+        return QRT_OK;
+    }
+    for (i = 0; i + 1 < n; i++)
+        if (segment_blocked(pl, waypoints_deg[i], waypoints_deg[i + 1])) {
+            *first_blocked = i;
+            break;
+        }
     return QRT_OK;
+}
+
+/* qrt_planner_check_path_now from kept or new clusters, segment by
+ * segment, so that a blocked one ends the work: its rows (besides those
+ * built already), then its proof. 0 when the clusters do not fit. */
+static int check_segments_lazily(struct qrt_planner *pl,
+                                 const double (*waypoints_deg)[3], int n,
+                                 int *first_blocked)
+{
+    struct qrt_raster r;
+    int kept = pl->lazy_kept, i, w;
+    if (!kept)
+        start_mask(pl);
+    qrt_raster_setup(&r, &pl->mask, &pl->params.arm, pl->radius_m,
+                     pl->params.cspace_margin_deg, 0, 1);
+    if (kept) {
+        qrt_lazy_resume(pl, &r);
+    } else if (!qrt_lazy_begin(pl, &r)) {
+        qrt_lazy_end(pl);
+        return 0;
+    }
+    for (i = 0; i + 1 < n; i++) {
+        for (w = 0; w < QRT_ROW_SET_WORDS; w++)
+            pl->check_rows[w] = 0;
+        qrt_motion_mark_rows(&pl->mask, waypoints_deg[i], waypoints_deg[i + 1],
+                             pl->check_rows);
+        qrt_lazy_build_rows(pl, pl->check_rows);
+        if (segment_blocked(pl, waypoints_deg[i], waypoints_deg[i + 1])) {
+            *first_blocked = i;
+            break;
+        }
+    }
+    qrt_lazy_end(pl);
+    pl->lazy_kept = 1;
+    return 1;
 }
 
 int qrt_planner_check_path_now(struct qrt_planner *pl,
                                const double (*waypoints_deg)[3], int n,
                                int *first_blocked)
 {
-    int rc;
+    int rc, i;
     *first_blocked = -1;
     rc = check_waypoints(pl, waypoints_deg, n);
     if (rc != QRT_OK)
         return rc;
-    build_rows_along(pl, waypoints_deg, n);
-    *first_blocked = pl->points.dropped > 0
-                         ? 0
-                         : first_blocked_segment(pl, waypoints_deg, n);
+    if (pl->points.dropped > 0) { /* a cloud that lost points proves nothing */
+        start_mask(pl);           /* (and the mask is partial, as promised) */
+        *first_blocked = 0;
+        return QRT_OK;
+    }
+    if (check_segments_lazily(pl, waypoints_deg, n, first_blocked))
+        return QRT_OK;
+    build_rows_along(pl, waypoints_deg, n); /* the clusters do not fit */
+    for (i = 0; i + 1 < n; i++)
+        if (segment_blocked(pl, waypoints_deg[i], waypoints_deg[i + 1])) {
+            *first_blocked = i;
+            break;
+        }
     return QRT_OK;
 }

@@ -666,15 +666,30 @@ void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
             qrt_raster_cluster_at(r, pts, members, mrho, &g, ia);
 }
 
+/* Any bit lo .. hi - 1 of the set? */
+static int any_bit(const uint64_t *set, long lo, long hi)
+{
+    while (lo < hi) {
+        long w = lo >> 6, end = (w + 1) << 6;
+        uint64_t bits = set[w] >> (lo & 63);
+        if (end > hi) /* only hi - lo of them */
+            bits &= ~0ULL >> (64 - (hi - lo));
+        if (bits)
+            return 1;
+        lo = end;
+    }
+    return 0;
+}
+
 void qrt_raster_only_rows(struct qrt_raster *r, const uint64_t *rows)
 {
-    int ia, is;
+    int ia;
     r->only_rows = rows;
     for (ia = 0; ia < r->mask->lat.n[0]; ia++) {
+        long first = (long)ia * QRT_MAX_NS;
         r->alpha_wanted[ia] = 0;
-        for (is = 0; is < r->mask->lat.n[1] && !r->alpha_wanted[ia]; is++)
-            if (wanted(r, ia, is))
-                r->alpha_wanted[ia] = 1;
+        if (!rows || any_bit(rows, first, first + r->mask->lat.n[1]))
+            r->alpha_wanted[ia] = 1;
     }
 }
 

@@ -70,9 +70,11 @@ int main(void)
                       "(%g %g %g)->(%g %g %g): %g",
                       a[0], a[1], a[2], b[0], b[1], b[2], c);
             }
+            /* the witness search after 4 steps (joins) or first (paths) */
             if (i % 4 == 0 &&
                 qrt_motion_free_exact(&prm.arm, pl.radius_m, &pl.points,
-                                      &pl.mask.lat, a, b, 1000)) {
+                                      &pl.mask.lat, a, b, 1000,
+                                      i % 8 == 0 ? QRT_WITNESS_AFTER : 0)) {
                 double c = motion_clearance(a, b, pts, n, radius);
                 accepted_exact++;
                 CHECK(c >= 0.0, "advancement accepted a colliding motion: %g",

@@ -169,6 +169,18 @@ static void random_plans(void)
               "trial %ld: plans differ: %s %d wp vs %s %d wp", trial,
               qrt_plan_status_name(full_plan.status), full_plan.n_waypoints,
               qrt_plan_status_name(now_plan.status), now_plan.n_waypoints);
+        if (now_plan.status == QRT_STATUS_OK && now_plan.n_waypoints > 1 &&
+            trial % 2 == 0) {
+            /* and the other order: the plan's own path checked on the rows
+             * the plan kept, and the few more it passes through */
+            int first = 0;
+            CHECK(qrt_planner_check_path_now(
+                      &pl, (const double(*)[3])now_plan.waypoints_deg,
+                      now_plan.n_waypoints, &first) == QRT_OK &&
+                      first == -1,
+                  "trial %ld: the plan checks free after it (%d)", trial,
+                  first);
+        }
         differing += ready_rows_differing(&built);
         if (now_plan.cells_blocked == -1) {
             partial++;
