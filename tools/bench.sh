@@ -13,13 +13,18 @@ build/bin/bench_table5 --repeats "${QRT_BENCH_REPEATS:-15}" --csv "$out/table5.c
 if command -v valgrind >/dev/null; then
     # count only the end-to-end plan, not building the points; the clock
     # reads inside it are a few hundred instructions
-    valgrind --tool=callgrind --callgrind-out-file="$out/callgrind.out" \
-        --collect-atstart=no --toggle-collect=plan_end_to_end \
-        build/bin/bench_table5 --single 10 1444 --repeats 1 >/dev/null 2>&1
-    total=$(callgrind_annotate "$out/callgrind.out" 2>/dev/null |
-        awk '/PROGRAM TOTALS/ {gsub(",", "", $1); print $1}')
+    count() { # function to toggle on -> instructions inside it
+        valgrind --tool=callgrind --callgrind-out-file="$out/callgrind.$1.out" \
+            --collect-atstart=no --toggle-collect="$1" \
+            build/bin/bench_table5 --single 10 1444 --repeats 1 >/dev/null 2>&1
+        callgrind_annotate "$out/callgrind.$1.out" 2>/dev/null |
+            awk '/PROGRAM TOTALS/ {gsub(",", "", $1); print $1}'
+    }
+    total=$(count plan_end_to_end)
+    whole=$(count plan_whole_mask)
     echo "callgrind, 10 spheres x 1444 points, one end-to-end plan (init," \
-        "points, mask, plan): $total instructions" | tee -a "$out/table5.txt"
+        "points, plan with the rows it reads): $total instructions;" \
+        "with the whole mask first: $whole" | tee -a "$out/table5.txt"
 fi
 
 # qrtpland: scan-to-plan latency over LCM (issue 4), 10 x 1444 at 20 Hz

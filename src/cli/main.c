@@ -13,6 +13,7 @@
 static const char usage[] =
     "usage: qrtplan plan SCENE.json [-o PLAN.json] [--dijkstra] "
     "[--no-simplify]\n"
+    "                    [--as-read]\n"
     "       qrtplan mask SCENE.json [-o MASK.json]\n"
     "       qrtplan gen [--spheres N] [--points K] [--radius R] [--distance "
     "D]\n"
@@ -35,6 +36,10 @@ static const char help[] =
     "       --dijkstra      plain Dijkstra instead of A* (same cost, more "
     "work)\n"
     "       --no-simplify   return the lattice path without shortcuts\n"
+    "       --as-read       build only the mask rows the plan reads, as it\n"
+    "                       reads them (qrt_planner_plan_now): the same plan,\n"
+    "                       sooner; stats then say cells_blocked -1 and put\n"
+    "                       the whole time under search\n"
     "mask   Write the scene's blocked lattice nodes as JSON (index =\n"
     "       (ia*ns + is)*ne + ie; node joints = lo_deg + i*grid_deg).\n"
     "gen    Write a scene of the paper's obstacle family (its Eq. 13, Fig. "
@@ -83,9 +88,10 @@ static int close_output(FILE *f, const char *path)
 /* The planner state is 4 MiB: static, as on a board. */
 static struct qrt_planner planner;
 
-/* Scene -> built mask. Returns 0 or an exit status. */
+/* Scene -> points in the planner and (build_mask) the mask. Returns 0 or
+ * an exit status. */
 static int prepare(const char *path, struct scene *sc, int use_astar,
-                   int simplify, long *convert_us)
+                   int simplify, int build_mask, long *convert_us)
 {
     char err[512];
     long t0;
@@ -108,8 +114,9 @@ static int prepare(const char *path, struct scene *sc, int use_astar,
         scene_free(sc);
         return fail(path, "obstacle points must be finite");
     }
-    qrt_planner_build_mask(&planner);
-    *convert_us = now_us() - t0;
+    if (build_mask)
+        qrt_planner_build_mask(&planner);
+    *convert_us = build_mask ? now_us() - t0 : 0;
     return 0;
 }
 
@@ -119,7 +126,7 @@ static int cmd_plan(int argc, char **argv)
     struct scene sc;
     struct qrt_plan plan;
     struct stage_times t;
-    int use_astar = 1, simplify = 1, i, rc;
+    int use_astar = 1, simplify = 1, as_read = 0, i, rc;
     long t_start = now_us(), t1;
     FILE *out;
     for (i = 0; i < argc; i++) {
@@ -129,6 +136,8 @@ static int cmd_plan(int argc, char **argv)
             use_astar = 0;
         else if (strcmp(argv[i], "--no-simplify") == 0)
             simplify = 0;
+        else if (strcmp(argv[i], "--as-read") == 0)
+            as_read = 1;
         else if (argv[i][0] != '-' && !scene_path)
             scene_path = argv[i];
         else
@@ -136,11 +145,12 @@ static int cmd_plan(int argc, char **argv)
     }
     if (!scene_path)
         return fail(NULL, "plan: no scene file given (see --help)");
-    rc = prepare(scene_path, &sc, use_astar, simplify, &t.convert_us);
+    rc = prepare(scene_path, &sc, use_astar, simplify, !as_read, &t.convert_us);
     if (rc)
         return rc;
     t1 = now_us();
-    rc = qrt_planner_plan(&planner, &sc.start, &sc.goal, &plan);
+    rc = as_read ? qrt_planner_plan_now(&planner, &sc.start, &sc.goal, &plan)
+                 : qrt_planner_plan(&planner, &sc.start, &sc.goal, &plan);
     t.search_us = now_us() - t1;
     scene_free(&sc);
     if (rc != QRT_OK)
@@ -170,7 +180,7 @@ static int cmd_mask(int argc, char **argv)
     }
     if (!scene_path)
         return fail(NULL, "mask: no scene file given (see --help)");
-    rc = prepare(scene_path, &sc, 1, 1, &convert_us);
+    rc = prepare(scene_path, &sc, 1, 1, 1, &convert_us);
     if (rc)
         return rc;
     scene_free(&sc);

@@ -54,8 +54,17 @@ int64_t Daemon::wall_us()
         .count();
 }
 
+// A planner's 4 MiB touched now, so that the first replan or stop does not
+// pay for the page faults.
+static qrt_planner *new_planner()
+{
+    auto *p = new qrt_planner;
+    std::memset(static_cast<void *>(p), 0, sizeof *p);
+    return p;
+}
+
 Daemon::Daemon(const Options &opts)
-    : opts_(opts), lcm_(opts.lcm_url), planner_(new qrt_planner),
+    : opts_(opts), lcm_(opts.lcm_url), planner_(new_planner()),
       picture_(opts.window_s), guard_picture_(opts.window_s)
 {
 }
@@ -268,6 +277,61 @@ void Daemon::set_executing(const Path &path)
     guard_path_id_++;
 }
 
+// The path being executed (the rest of it, when the drives report where
+// they are): still free among the points now in the planner? Asked after
+// the plan, on the rows it built (the guard thread, with CAN, asks first on
+// its own); a blocked path is dropped and, unless the guard already did,
+// the arm stopped.
+bool Daemon::executing_blocked(const std::array<double, 3> &here,
+                               bool know_here, const CanLinkStatus &cs)
+{
+    if (executing_.empty())
+        return false;
+    Path rest;
+    if (can_ && cs.master.state == QRTCAN_MASTER_MOVING && know_here) {
+        rest.push_back(here);
+        for (size_t i = size_t(std::max(cs.master.waypoint, 1));
+             i < executing_.size(); i++)
+            rest.push_back(executing_[i]);
+    } else if (!can_) {
+        rest = executing_;
+    }
+    bool guard_stopped;
+    {
+        std::lock_guard<std::mutex> lock(mu_);
+        guard_stopped = guard_stopped_id_ == guard_path_id_;
+    }
+    if (guard_stopped) { // the guard saw it first and stopped the arm
+        set_executing(Path());
+        return true;
+    }
+    int first = -1;
+    const double(*wp)[3] = reinterpret_cast<const double(*)[3]>(rest.data());
+    // a whole mask is built: ask it; else build the path's rows (most of
+    // them the plan has just built)
+    int rc = rest.size() < 2 ? QRT_E_INVALID
+             : opts_.mask_as_read
+                 ? qrt_planner_check_path_now(planner_.get(), wp,
+                                              int(rest.size()), &first)
+                 : qrt_planner_check_path(planner_.get(), wp, int(rest.size()),
+                                          &first);
+    if (rc != QRT_OK || first < 0)
+        return false;
+    bool guard_was_first;
+    { // the guard may have found it at the same time: one stop
+        std::lock_guard<std::mutex> lock(mu_);
+        guard_was_first = guard_stopped_id_ == guard_path_id_;
+        guard_stopped_id_ = guard_path_id_;
+    }
+    if (can_ && !guard_was_first)
+        can_->quick_stop(); // before anything else
+    if (!guard_was_first)
+        log(LogLevel::warn, "the path being executed is blocked (segment %d)%s",
+            first, can_ ? ": quick stop sent" : "");
+    set_executing(Path());
+    return true;
+}
+
 void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
                     int64_t trigger_us)
 {
@@ -287,57 +351,14 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
     qrt_planner_clear_points(pl);
     qrt_planner_add_points(pl, gather_.data(), long(gather_.size() / 3));
 
-    // the path being executed: still free among the new points? Asked
-    // before the whole mask is built (only the rows the path passes through
-    // are), so that a stop goes out as early as it can
-    bool blocked = false;
     std::array<double, 3> here{};
     bool know_here = current_joints(&here);
     CanLinkStatus cs;
     if (can_)
         cs = can_->status();
-    if (!executing_.empty()) {
-        Path rest;
-        if (can_ && cs.master.state == QRTCAN_MASTER_MOVING && know_here) {
-            rest.push_back(here);
-            for (size_t i = size_t(std::max(cs.master.waypoint, 1));
-                 i < executing_.size(); i++)
-                rest.push_back(executing_[i]);
-        } else if (!can_) {
-            rest = executing_;
-        }
-        int first = -1;
-        bool guard_stopped;
-        {
-            std::lock_guard<std::mutex> lock(mu_);
-            guard_stopped = guard_stopped_id_ == guard_path_id_;
-        }
-        if (guard_stopped) { // the guard saw it first and stopped the arm
-            blocked = true;
-            set_executing(Path());
-        } else if (rest.size() >= 2 &&
-                   qrt_planner_check_path_now(
-                       pl, reinterpret_cast<const double(*)[3]>(rest.data()),
-                       int(rest.size()), &first) == QRT_OK &&
-                   first >= 0) {
-            blocked = true;
-            bool guard_was_first;
-            { // the guard may have found it at the same time: one stop
-                std::lock_guard<std::mutex> lock(mu_);
-                guard_was_first = guard_stopped_id_ == guard_path_id_;
-                guard_stopped_id_ = guard_path_id_;
-            }
-            if (can_ && !guard_was_first)
-                can_->quick_stop(); // before anything else
-            if (!guard_was_first)
-                log(LogLevel::warn,
-                    "the path being executed is blocked (segment %d)%s", first,
-                    can_ ? ": quick stop sent" : "");
-            set_executing(Path());
-        }
-    }
-    int64_t t_check = now_us();
-    build_mask();
+    int64_t t_mask = now_us();
+    if (!opts_.mask_as_read)
+        build_mask();
     int64_t t2 = now_us();
 
     qrt_target start{}, goal{};
@@ -354,17 +375,27 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
         for (int j = 0; j < 3; j++)
             start.value[j] = here[size_t(j)];
     } else {
+        int64_t tc = now_us();
+        bool blocked = executing_blocked(here, know_here, cs);
         publish_plan(nullptr, "invalid_request",
                      "no start: the request has none and no joint state has "
                      "been received on " +
                          opts_.joint_channel,
-                     blocked, t1 - t0, t_check - t1, t2 - t_check, 0,
+                     blocked, t1 - t0, now_us() - tc, t2 - t_mask, 0,
                      trigger_us);
         return;
     }
     static qrt_plan plan; // 6 KiB: not on the thread's stack
-    int rc = qrt_planner_plan(pl, &start, &goal, &plan);
+    int rc = opts_.mask_as_read ? qrt_planner_plan_now(pl, &start, &goal, &plan)
+                                : qrt_planner_plan(pl, &start, &goal, &plan);
     int64_t t3 = now_us();
+    // as read, mask and search are one stage: all of it counts as the mask
+    int64_t mask_us = opts_.mask_as_read ? t3 - t2 : t2 - t_mask;
+    int64_t search_us = opts_.mask_as_read ? 0 : t3 - t2;
+    // the path being executed, on the rows the plan has just built (and
+    // the few more it passes through)
+    bool blocked = executing_blocked(here, know_here, cs);
+    int64_t check_us = now_us() - t3;
     if (rc != QRT_OK) {
         std::string why = std::string("the request is invalid: ") +
                           qrt_err_name(rc) +
@@ -375,12 +406,12 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
             reject(why);
         }
         publish_plan(nullptr, "invalid_request", why, blocked, t1 - t0,
-                     t_check - t1, t2 - t_check, t3 - t2, trigger_us);
+                     check_us, mask_us, search_us, trigger_us);
         return;
     }
     publish_plan(&plan, qrt_plan_status_name(plan.status),
-                 plan.detail ? plan.detail : "", blocked, t1 - t0, t_check - t1,
-                 t2 - t_check, t3 - t2, trigger_us);
+                 plan.detail ? plan.detail : "", blocked, t1 - t0, check_us,
+                 mask_us, search_us, trigger_us);
     if (plan.status != QRT_STATUS_OK)
         return;
     Path path;
@@ -410,6 +441,9 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
     }
 }
 
+// Longest a replan waits for the guard thread to check the same scan.
+constexpr int GUARD_YIELD_MS = 40;
+
 void Daemon::planner_loop(const std::atomic<bool> &stop)
 {
     while (!stop) {
@@ -422,6 +456,14 @@ void Daemon::planner_loop(const std::atomic<bool> &stop)
                 return stop || !pending_scans_.empty() || have_pending_request_;
             });
             scans.swap(pending_scans_);
+            // a scan that may stop the arm goes to the guard first: the
+            // replan starts when the guard is done with it (or after
+            // GUARD_YIELD_MS, so a slow guard cannot hold plans back)
+            if (guard_planner_ && !scans.empty())
+                guard_idle_.wait_for(
+                    lock, std::chrono::milliseconds(GUARD_YIELD_MS), [&] {
+                        return stop || (!guard_busy_ && guard_scans_.empty());
+                    });
             if (have_pending_request_) {
                 have_pending_request_ = false;
                 new_request = true;
@@ -554,9 +596,14 @@ void Daemon::guard_loop(const std::atomic<bool> &stop)
             if (guard_stopped_id_ != guard_path_id_)
                 path = guard_path_;
             id = guard_path_id_;
+            guard_busy_ = !scans.empty();
         }
-        if (!scans.empty())
+        if (!scans.empty()) {
             guard_check(scans, path, id);
+            std::lock_guard<std::mutex> lock(mu_);
+            guard_busy_ = false;
+            guard_idle_.notify_all();
+        }
     }
 }
 
@@ -635,7 +682,7 @@ int Daemon::run(const std::atomic<bool> &stop)
             return 2;
         }
         log(LogLevel::info, "CAN: drives on %s", opts_.can_iface.c_str());
-        guard_planner_.reset(new qrt_planner);
+        guard_planner_.reset(new_planner());
         qrt_planner_init(guard_planner_.get(), &opts_.params); // checked above
     }
     started_us_ = now_us();

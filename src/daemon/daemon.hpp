@@ -60,6 +60,8 @@ class Daemon
     void guard_check(std::map<std::string, PendingScan> &scans,
                      const Path &path, uint64_t path_id);
     void set_executing(const Path &path);
+    bool executing_blocked(const std::array<double, 3> &here, bool know_here,
+                           const CanLinkStatus &cs);
     void ingest(std::map<std::string, PendingScan> &scans, Picture *picture,
                 bool report, long *invalid);
     void replan(std::map<std::string, PendingScan> &scans, bool new_request,
@@ -101,6 +103,10 @@ class Daemon
     // the guard's share (with CAN): its own queue of the newest scans, and
     // the path being executed as the planner last handed it to the drives
     std::condition_variable guard_wake_;
+    // the guard is checking scans: the planner thread waits (briefly) so
+    // that the stop does not share the CPU with a replan
+    bool guard_busy_ = false;
+    std::condition_variable guard_idle_;
     std::map<std::string, PendingScan> guard_scans_;
     Path guard_path_;
     uint64_t guard_path_id_ = 0;        // bumped whenever the path changes

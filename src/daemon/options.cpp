@@ -32,7 +32,10 @@ const char *kUsage =
     "  --status-channel NAME    1 Hz daemon status (QRT_STATUS)\n"
     "  --window SECONDS         obstacle picture = every scan of the last\n"
     "                           SECONDS per sensor (0: the latest scan only)\n"
-    "  --mask-threads 1|2       build the mask on 1 or 2 threads (2)\n"
+    "  --mask as-read|whole     build only the mask rows the plan reads,\n"
+    "                           as it reads them, or the whole mask first\n"
+    "                           (as-read; the plan is the same)\n"
+    "  --mask-threads 1|2       build a whole mask on 1 or 2 threads (2)\n"
     "  --max-returns N          refuse scans with more returns (1000000)\n"
     "  --margin M               workspace margin, metres (0.01)\n"
     "  --cspace-margin DEG      C-space margin (paper Eq. 12), degrees (0)\n"
@@ -93,6 +96,10 @@ bool apply(Options *o, const std::string &key, const std::string &value,
         if (!number(0, 3600))
             return bad("seconds in 0..3600");
         o->window_s = v;
+    } else if (key == "mask") {
+        if (value != "as-read" && value != "whole")
+            return bad("as-read or whole");
+        o->mask_as_read = value == "as-read";
     } else if (key == "mask-threads") {
         if (value != "1" && value != "2")
             return bad("1 or 2");

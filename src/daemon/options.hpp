@@ -19,6 +19,7 @@ struct Options {
     std::string joint_channel = "QRT_JOINT_STATE";
     std::string status_channel = "QRT_STATUS";
     double window_s = 0.0;      // 0: the latest scan of each sensor
+    bool mask_as_read = true;   // qrt_planner_plan_now, else the whole mask
     int mask_threads = 2;       // 1 or 2 (qrt_planner_build_mask_part)
     long max_returns = 1000000; // per scan; larger scans are rejected
     qrt_params params{};        // arm, margins, grid (qrt_params_default)

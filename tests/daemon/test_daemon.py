@@ -19,8 +19,8 @@ def assert_safe(scene, plan, points):
     return res
 
 
-def test_scan_and_request_give_a_safe_plan(daemon):
-    d, c = daemon()
+def plan_ten_spheres(daemon, mask):
+    d, c = daemon("--mask", mask)
     scene, pts = scene_points("ten_spheres.json")
     c.publish("QRT_SCAN", scan_from_points(pts, position=(0.0, 0.0, 0.5)))
     c.publish("QRT_PLAN_REQUEST", request(scene["goal"]["joints_deg"],
@@ -31,9 +31,23 @@ def test_scan_and_request_give_a_safe_plan(daemon):
     assert p.status == "ok", p.detail
     assert p.points == len(pts)
     assert list(p.waypoints_deg[0]) == scene["start"]["joints_deg"]
-    assert p.mask_us > 0 and p.total_us >= p.mask_us
+    assert p.mask_us > 0 and p.total_us >= p.mask_us + p.search_us
+    # as read, the rows are built during the search: one stage, in mask_us
+    assert (p.search_us == 0) == (mask == "as-read")
     res = assert_safe(scene, p, pts)
     assert res.samples > 100
+    return p
+
+
+def test_scan_and_request_give_a_safe_plan(daemon):
+    plan_ten_spheres(daemon, "as-read")
+
+
+def test_both_mask_modes_plan_the_same(daemon):
+    plans = [plan_ten_spheres(daemon, m) for m in ("as-read", "whole")]
+    assert [list(w) for w in plans[0].waypoints_deg] == \
+        [list(w) for w in plans[1].waypoints_deg]
+    assert plans[0].cost_deg == plans[1].cost_deg
 
 
 def test_replans_on_every_scan_and_reports_a_blocked_path(daemon):
