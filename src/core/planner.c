@@ -482,32 +482,31 @@ static enum qrt_plan_status end_status(enum end_outcome o, int is_goal)
     return is_goal ? QRT_STATUS_GOAL_BLOCKED : QRT_STATUS_START_BLOCKED;
 }
 
-/* The rows in pl->check_rows, from the clusters kept by the last call on
- * these points (kept) or from new ones, which are kept for a later
- * qrt_planner_plan_now (0: they do not fit, nothing built). */
-static int rows_from_clusters(struct qrt_planner *pl, int kept)
+/* Start building rows as they are read, with r: from the clusters kept
+ * for these points, or from new ones (on a cleared mask). 0 when they do
+ * not fit beside the heap (the mask is then cleared and partial). */
+static int lazy_start(struct qrt_planner *pl, struct qrt_raster *r)
 {
-    struct qrt_raster r;
-    qrt_raster_setup(&r, &pl->mask, &pl->params.arm, pl->radius_m,
+    int kept = pl->lazy_kept;
+    if (!kept)
+        start_mask(pl);
+    qrt_raster_setup(r, &pl->mask, &pl->params.arm, pl->radius_m,
                      pl->params.cspace_margin_deg, 0, 1);
-    if (kept) {
-        qrt_lazy_resume(pl, &r);
-    } else if (!qrt_lazy_begin(pl, &r)) {
-        qrt_lazy_end(pl);
-        return 0;
+    if (kept) { /* the same points: go on from the rows already built */
+        qrt_lazy_resume(pl, r);
+        return 1;
     }
-    qrt_lazy_build_rows(pl, pl->check_rows);
+    if (qrt_lazy_begin(pl, r))
+        return 1;
     qrt_lazy_end(pl);
-    pl->lazy_kept = 1;
-    return 1;
+    return 0;
 }
 
-/* Only the mask rows the motions between consecutive waypoints pass
- * through (the walk that tests a motion marks them, so exactly those),
- * besides any kept from the last call on these points. The mask is
- * partial, hence stale, from here on. */
-static void build_rows_along(struct qrt_planner *pl,
-                             const double (*waypoints_deg)[3], int n)
+/* In pl->check_rows, the mask rows that the motions between consecutive
+ * waypoints pass through (the walk that tests a motion marks them, so
+ * exactly those). */
+static void mark_rows_along(struct qrt_planner *pl,
+                            const double (*waypoints_deg)[3], int n)
 {
     int i, w;
     for (w = 0; w < QRT_ROW_SET_WORDS; w++)
@@ -515,13 +514,32 @@ static void build_rows_along(struct qrt_planner *pl,
     for (i = 0; i + 1 < n; i++)
         qrt_motion_mark_rows(&pl->mask, waypoints_deg[i], waypoints_deg[i + 1],
                              pl->check_rows);
-    if (pl->lazy_kept) {
-        rows_from_clusters(pl, 1);
-        return;
-    }
-    start_mask(pl);
-    if (!rows_from_clusters(pl, 0))
+}
+
+/* The rows in pl->check_rows from clusters, kept for a later call on the
+ * same points (0: they do not fit, nothing built). */
+static int rows_from_clusters(struct qrt_planner *pl)
+{
+    struct qrt_raster r;
+    if (!lazy_start(pl, &r))
+        return 0;
+    qrt_lazy_build_rows(pl, pl->check_rows);
+    qrt_lazy_end(pl);
+    pl->lazy_kept = 1;
+    return 1;
+}
+
+/* Only the mask rows the path passes through, besides any kept from the
+ * last call on these points. The mask is partial, hence stale, from here
+ * on. */
+static void build_rows_along(struct qrt_planner *pl,
+                             const double (*waypoints_deg)[3], int n)
+{
+    mark_rows_along(pl, waypoints_deg, n);
+    if (!rows_from_clusters(pl)) {
+        start_mask(pl);
         raster_part(pl, 0, 1, pl->check_rows);
+    }
 }
 
 int qrt_planner_plan_straight(struct qrt_planner *pl,
@@ -636,17 +654,8 @@ static int plan_lazily(struct qrt_planner *pl, const struct qrt_target *start,
                        const struct qrt_target *goal, struct qrt_plan *plan)
 {
     struct qrt_raster r;
-    int kept = pl->lazy_kept;
-    if (!kept)
-        start_mask(pl);
-    qrt_raster_setup(&r, &pl->mask, &pl->params.arm, pl->radius_m,
-                     pl->params.cspace_margin_deg, 0, 1);
-    if (kept) { /* the same points: go on from the rows already built */
-        qrt_lazy_resume(pl, &r);
-    } else if (!qrt_lazy_begin(pl, &r)) {
-        qrt_lazy_end(pl);
+    if (!lazy_start(pl, &r))
         return 0;
-    }
     pl->cells_blocked = -1; /* the whole mask is not built */
     plan_on_mask(pl, start, goal, plan);
     if (qrt_lazy_end(pl)) { /* the heap needed the clusters' room */
@@ -708,26 +717,32 @@ static int segment_blocked(const struct qrt_planner *pl, const double a[3],
                                   QRT_WITNESS_AFTER);
 }
 
+/* The first segment segment_blocked finds, or -1. */
+static int first_blocked_segment(const struct qrt_planner *pl,
+                                 const double (*waypoints_deg)[3], int n)
+{
+    int i;
+    for (i = 0; i + 1 < n; i++)
+        if (segment_blocked(pl, waypoints_deg[i], waypoints_deg[i + 1]))
+            return i;
+    return -1;
+}
+
 int qrt_planner_check_path(const struct qrt_planner *pl,
                            const double (*waypoints_deg)[3], int n,
                            int *first_blocked)
 {
-    int rc, i;
+    int rc;
     *first_blocked = -1;
     if (pl->mask_stale)
         return QRT_E_INVALID;
     rc = check_waypoints(pl, waypoints_deg, n);
     if (rc != QRT_OK)
         return rc;
-    if (pl->points.dropped > 0) { /* a cloud that lost points proves nothing */
-        *first_blocked = 0;
-        return QRT_OK;
-    }
-    for (i = 0; i + 1 < n; i++)
-        if (segment_blocked(pl, waypoints_deg[i], waypoints_deg[i + 1])) {
-            *first_blocked = i;
-            break;
-        }
+    /* a cloud that lost points to capacity proves nothing free */
+    *first_blocked = pl->points.dropped > 0
+                         ? 0
+                         : first_blocked_segment(pl, waypoints_deg, n);
     return QRT_OK;
 }
 
@@ -739,22 +754,11 @@ static int check_segments_lazily(struct qrt_planner *pl,
                                  int *first_blocked)
 {
     struct qrt_raster r;
-    int kept = pl->lazy_kept, i, w;
-    if (!kept)
-        start_mask(pl);
-    qrt_raster_setup(&r, &pl->mask, &pl->params.arm, pl->radius_m,
-                     pl->params.cspace_margin_deg, 0, 1);
-    if (kept) {
-        qrt_lazy_resume(pl, &r);
-    } else if (!qrt_lazy_begin(pl, &r)) {
-        qrt_lazy_end(pl);
+    int i;
+    if (!lazy_start(pl, &r))
         return 0;
-    }
     for (i = 0; i + 1 < n; i++) {
-        for (w = 0; w < QRT_ROW_SET_WORDS; w++)
-            pl->check_rows[w] = 0;
-        qrt_motion_mark_rows(&pl->mask, waypoints_deg[i], waypoints_deg[i + 1],
-                             pl->check_rows);
+        mark_rows_along(pl, waypoints_deg + i, 2);
         qrt_lazy_build_rows(pl, pl->check_rows);
         if (segment_blocked(pl, waypoints_deg[i], waypoints_deg[i + 1])) {
             *first_blocked = i;
@@ -770,7 +774,7 @@ int qrt_planner_check_path_now(struct qrt_planner *pl,
                                const double (*waypoints_deg)[3], int n,
                                int *first_blocked)
 {
-    int rc, i;
+    int rc;
     *first_blocked = -1;
     rc = check_waypoints(pl, waypoints_deg, n);
     if (rc != QRT_OK)
@@ -782,11 +786,9 @@ int qrt_planner_check_path_now(struct qrt_planner *pl,
     }
     if (check_segments_lazily(pl, waypoints_deg, n, first_blocked))
         return QRT_OK;
-    build_rows_along(pl, waypoints_deg, n); /* the clusters do not fit */
-    for (i = 0; i + 1 < n; i++)
-        if (segment_blocked(pl, waypoints_deg[i], waypoints_deg[i + 1])) {
-            *first_blocked = i;
-            break;
-        }
+    /* the clusters do not fit: the whole path's rows in one pass */
+    mark_rows_along(pl, waypoints_deg, n);
+    raster_part(pl, 0, 1, pl->check_rows);
+    *first_blocked = first_blocked_segment(pl, waypoints_deg, n);
     return QRT_OK;
 }

@@ -312,8 +312,9 @@ static double sparse[3 * QRT_MAX_POINTS];
 static void too_many_clusters(void)
 {
     struct qrt_params prm;
-    struct qrt_target s = {QRT_TARGET_JOINTS, {-90, 0, 0}};
-    struct qrt_target g = {QRT_TARGET_JOINTS, {90, 0, 0}};
+    /* the arm folded (elbow up, link 3 hanging back): inside the shell */
+    struct qrt_target s = {QRT_TARGET_JOINTS, {-90, 90, -160}};
+    struct qrt_target g = {QRT_TARGET_JOINTS, {90, 60, -160}};
     long n = 0;
     int i, j, k;
     for (i = 0; i < 40; i++) /* a shell 0.75 .. 0.95 m from the base */
@@ -339,6 +340,29 @@ static void too_many_clusters(void)
     CHECK(now_plan.cells_blocked == full_plan.cells_blocked &&
               now_plan.cells_blocked >= 0,
           "fallback builds the whole mask: %ld", now_plan.cells_blocked);
+    if (full_plan.status == QRT_STATUS_OK && full_plan.n_waypoints > 1) {
+        /* and the path check, from the whole path's rows in one pass */
+        int first = 0, whole_first = 0;
+        qrt_planner_check_path(&pl, (const double(*)[3])full_plan.waypoints_deg,
+                               full_plan.n_waypoints, &whole_first);
+        CHECK(qrt_planner_check_path_now(
+                  &pl, (const double(*)[3])full_plan.waypoints_deg,
+                  full_plan.n_waypoints, &first) == QRT_OK &&
+                  first == -1 && whole_first == -1,
+              "fallback: the plan checks free (%d, %d)", first, whole_first);
+        CHECK(!pl.lazy_kept, "fallback: nothing kept");
+    }
+    { /* a path out into the shell is blocked, both ways */
+        static const double out[2][3] = {{-90, 90, -160}, {-90, 0, 0}};
+        int first = -1, whole_first = -1;
+        qrt_planner_build_mask(&pl);
+        qrt_planner_check_path(&pl, out, 2, &whole_first);
+        qrt_planner_check_path_now(&pl, out, 2, &first);
+        CHECK(first == 0 && whole_first == 0, "fallback: blocked (%d, %d)",
+              first, whole_first);
+    }
+    CHECK(full_plan.status == QRT_STATUS_OK, "fallback scene: %s",
+          qrt_plan_status_name(full_plan.status));
 }
 
 int main(void)
