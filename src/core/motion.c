@@ -38,7 +38,8 @@ static int cell_of(const struct qrt_lattice *lat, const double x[3], int ijk[3])
  * One walk for both, so a check on rows built from the marks looks at
  * exactly the rows that were built. */
 static int walk(const struct qrt_mask *mask, qrt_row_need need, void *ctx,
-                const double a_deg[3], const double b_deg[3], uint64_t *rows)
+                const double a_deg[3], const double b_deg[3], uint64_t *rows,
+                double *t_hit)
 {
     const struct qrt_lattice *lat = &mask->lat;
     double x0[3], dx[3], d[3], next_t[3], step_t[3], t = 0.0;
@@ -80,6 +81,8 @@ static int walk(const struct qrt_mask *mask, qrt_row_need need, void *ctx,
                 rows[bit >> 6] |= 1ULL << (bit & 63);
             }
         } else {
+            if (t_hit) /* where the motion is in the cell it fails in */
+                *t_hit = 0.5 * (t + t_end);
             if (!inside)
                 return 0;
             if (need)
@@ -97,20 +100,28 @@ static int walk(const struct qrt_mask *mask, qrt_row_need need, void *ctx,
 int qrt_motion_free_on_mask(const struct qrt_mask *mask, const double a_deg[3],
                             const double b_deg[3])
 {
-    return walk(mask, NULL, NULL, a_deg, b_deg, NULL);
+    return walk(mask, NULL, NULL, a_deg, b_deg, NULL, NULL);
 }
 
 int qrt_motion_free_on_rows(const struct qrt_mask *mask, qrt_row_need need,
                             void *ctx, const double a_deg[3],
                             const double b_deg[3])
 {
-    return walk(mask, need, ctx, a_deg, b_deg, NULL);
+    return walk(mask, need, ctx, a_deg, b_deg, NULL, NULL);
+}
+
+int qrt_motion_free_on_mask_hit(const struct qrt_mask *mask,
+                                const double a_deg[3], const double b_deg[3],
+                                double *t_hit)
+{
+    *t_hit = 0.0;
+    return walk(mask, NULL, NULL, a_deg, b_deg, NULL, t_hit);
 }
 
 void qrt_motion_mark_rows(const struct qrt_mask *mask, const double a_deg[3],
                           const double b_deg[3], uint64_t *rows)
 {
-    (void)walk(mask, NULL, NULL, a_deg, b_deg, rows);
+    (void)walk(mask, NULL, NULL, a_deg, b_deg, rows, NULL);
 }
 
 double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],
@@ -177,6 +188,20 @@ static int has_witness(const struct qrt_arm *arm, const double radius_m[3],
                 return 1;
         }
     return 0;
+}
+
+int qrt_motion_collides_at(const struct qrt_arm *arm, const double radius_m[3],
+                           const struct qrt_points *pts,
+                           const struct qrt_lattice *lat, const double a_deg[3],
+                           const double b_deg[3], double t)
+{
+    double d[3], q[3];
+    int j;
+    qrt_motion_delta(lat, a_deg, b_deg, d);
+    for (j = 0; j < 3; j++)
+        q[j] = a_deg[j] + t * d[j];
+    /* the witness test of has_witness */
+    return qrt_clearance_capped(arm, radius_m, pts, q, 2e-7) <= 1e-7;
 }
 
 int qrt_motion_free_exact(const struct qrt_arm *arm, const double radius_m[3],

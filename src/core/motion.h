@@ -18,6 +18,20 @@ void qrt_motion_delta(const struct qrt_lattice *lat, const double a_deg[3],
 int qrt_motion_free_on_mask(const struct qrt_mask *mask, const double a_deg[3],
                             const double b_deg[3]);
 
+/* qrt_motion_free_on_mask, and where it fails, *t_hit: the motion's
+ * parameter (0..1) in the middle of the first cell that is blocked or
+ * outside the lattice. */
+int qrt_motion_free_on_mask_hit(const struct qrt_mask *mask,
+                                const double a_deg[3], const double b_deg[3],
+                                double *t_hit);
+
+/* Does the configuration at parameter t of the motion a -> b (alpha the
+ * short way) collide with the points (clearance <= 1e-7 m)? */
+int qrt_motion_collides_at(const struct qrt_arm *arm, const double radius_m[3],
+                           const struct qrt_points *pts,
+                           const struct qrt_lattice *lat, const double a_deg[3],
+                           const double b_deg[3], double t);
+
 /* Called before a mask row (ia, is) is read, to build it if need be. */
 typedef void (*qrt_row_need)(void *ctx, int ia, int is);
 

@@ -701,17 +701,24 @@ static int check_waypoints(const struct qrt_planner *pl,
 }
 
 /* Is the motion a -> b proved free neither on the mask (every row the walk
- * looks at must be built) nor against the points? (The witness search
- * waits QRT_WITNESS_AFTER steps here too: a path's first and last segments
- * are often joins that only advancement proves, in a step or two, and a
- * search of every sample first would cost them 32 clearances.) */
+ * looks at must be built) nor against the points? Where the mask walk
+ * fails, the motion most often collides: that configuration and the end
+ * of the motion (a new obstacle on the goal) are asked first, a clearance
+ * each, before advancement (whose witness search waits
+ * QRT_WITNESS_AFTER steps: a path's first and last segments are often
+ * joins that only advancement proves, in a step or two). */
 static int segment_blocked(const struct qrt_planner *pl, const double a[3],
                            const double b[3])
 {
-    double radius[3];
-    if (qrt_motion_free_on_mask(&pl->mask, a, b))
+    double radius[3], t_hit;
+    if (qrt_motion_free_on_mask_hit(&pl->mask, a, b, &t_hit))
         return 0;
     exact_radii(pl, radius);
+    if (qrt_motion_collides_at(&pl->params.arm, radius, &pl->points,
+                               &pl->mask.lat, a, b, t_hit) ||
+        qrt_motion_collides_at(&pl->params.arm, radius, &pl->points,
+                               &pl->mask.lat, a, b, 1.0))
+        return 1;
     return !qrt_motion_free_exact(&pl->params.arm, radius, &pl->points,
                                   &pl->mask.lat, a, b, EXACT_MAX_STEPS,
                                   QRT_WITNESS_AFTER);

@@ -1,6 +1,8 @@
 /* Certified motions: every motion the mask walk or the conservative
  * advancement accepts is free when sampled finely with the reference arm,
- * across the alpha seam too. Uses the core's internal motion.h. */
+ * across the alpha seam too; where the walk fails, the configuration it
+ * names collides exactly when the reference arm says so. Uses the core's
+ * internal motion.h. */
 #include "../../src/core/motion.h"
 #include "check.h"
 #include "qrtplan/qrtplan.h"
@@ -38,7 +40,7 @@ int main(void)
 {
     struct qrt_params prm;
     double pts[3 * 12], radius[3];
-    int trial, accepted_mask = 0, accepted_exact = 0, i, k;
+    int trial, accepted_mask = 0, accepted_exact = 0, collided_at = 0, i, k;
     test_seed(31337);
     for (trial = 0; trial < test_count(40); trial++) {
         int n = 2 + trial % 10;
@@ -69,6 +71,25 @@ int main(void)
                       "mask walk accepted a colliding motion "
                       "(%g %g %g)->(%g %g %g): %g",
                       a[0], a[1], a[2], b[0], b[1], b[2], c);
+            } else {
+                /* where the walk fails, the configuration it names is
+                 * called colliding exactly when the reference says so */
+                double t, d[3], q[3];
+                int j, hit;
+                CHECK(!qrt_motion_free_on_mask_hit(&pl.mask, a, b, &t) &&
+                          t >= 0.0 && t <= 1.0,
+                      "walk hit at %g", t);
+                hit = qrt_motion_collides_at(&prm.arm, pl.radius_m, &pl.points,
+                                             &pl.mask.lat, a, b, t);
+                d[0] = wrap180(b[0] - a[0]);
+                d[1] = b[1] - a[1];
+                d[2] = b[2] - a[2];
+                for (j = 0; j < 3; j++)
+                    q[j] = a[j] + t * d[j];
+                CHECK(hit == (ref_clearance(q, pts, n, radius) <= 1e-7),
+                      "collides_at %d, reference clearance %g", hit,
+                      ref_clearance(q, pts, n, radius));
+                collided_at += hit;
             }
             /* the witness search after 4 steps (joins) or first (paths) */
             if (i % 4 == 0 &&
@@ -86,6 +107,8 @@ int main(void)
            accepted_exact);
     CHECK(accepted_mask > test_count(1000) && accepted_exact > test_count(200),
           "too few accepted");
+    CHECK(collided_at >= test_count(20), "only %d walks failed in a collision",
+          collided_at);
     {
         /* the seam: 175 -> -175 is a 10 degree move, not 350 */
         double a[3] = {175, 0, 0}, b[3] = {-175, 0, 0}, d[3];
