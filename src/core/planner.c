@@ -329,6 +329,15 @@ static int check_target(const struct qrt_arm *arm, const struct qrt_target *t)
     return QRT_OK;
 }
 
+/* Both targets of a plan: QRT_OK, or the first one's error. */
+static int check_targets(const struct qrt_planner *pl,
+                         const struct qrt_target *start,
+                         const struct qrt_target *goal)
+{
+    int rc = check_target(&pl->params.arm, start);
+    return rc != QRT_OK ? rc : check_target(&pl->params.arm, goal);
+}
+
 static void set_status(struct qrt_plan *plan, enum qrt_plan_status status,
                        const char *detail)
 {
@@ -549,8 +558,7 @@ int qrt_planner_plan_straight(struct qrt_planner *pl,
 {
     double wp[2][3];
     int rc;
-    if ((rc = check_target(&pl->params.arm, start)) != QRT_OK ||
-        (rc = check_target(&pl->params.arm, goal)) != QRT_OK)
+    if ((rc = check_targets(pl, start, goal)) != QRT_OK)
         return rc;
     if (start->kind != QRT_TARGET_JOINTS || goal->kind != QRT_TARGET_JOINTS ||
         !pl->params.simplify || pl->points.dropped > 0)
@@ -639,8 +647,7 @@ int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
                      const struct qrt_target *goal, struct qrt_plan *plan)
 {
     int rc;
-    if ((rc = check_target(&pl->params.arm, start)) != QRT_OK ||
-        (rc = check_target(&pl->params.arm, goal)) != QRT_OK)
+    if ((rc = check_targets(pl, start, goal)) != QRT_OK)
         return rc;
     if (pl->mask_stale)
         return QRT_E_INVALID;
@@ -672,8 +679,7 @@ int qrt_planner_plan_now(struct qrt_planner *pl, const struct qrt_target *start,
                          const struct qrt_target *goal, struct qrt_plan *plan)
 {
     int rc;
-    if ((rc = check_target(&pl->params.arm, start)) != QRT_OK ||
-        (rc = check_target(&pl->params.arm, goal)) != QRT_OK)
+    if ((rc = check_targets(pl, start, goal)) != QRT_OK)
         return rc;
     if (!plan_lazily(pl, start, goal, plan)) {
         qrt_planner_build_mask(pl);
