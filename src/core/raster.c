@@ -20,7 +20,7 @@
 #include "geom.h"
 
 /* Open spans up to this many nodes are decided node by node by
- * sector_hits rather than by each member's eta range. */
+ * mark_edge_nodes rather than by each member's eta range. */
 #define SECTOR_SPAN_MAX 4
 
 /* radians added to every angular result: covers rounding and the fast
@@ -373,52 +373,137 @@ static int bit_set(const uint64_t *row, int i)
     return (int)((row[i >> 6] >> (i & 63)) & 1U);
 }
 
-/* Does link 3 on row is, with psi anywhere in node ie's range psi_j +- 2h
- * (j = is + ie), come within pl->reach3 of the disc centre? The question
- * link3_row_ranges answers for a whole row with approximate angles, asked
- * exactly of one node: the sector the link sweeps from the elbow (radius
- * L3, between the two edge directions) against the disc. */
-static int sector_hits(const struct qrt_raster *r, int is, int ie,
-                       const struct plane *pl)
+/* A disc (a member's plane) as seen from the elbow of one sigma row: its
+ * centre w relative to the elbow, d2 = |w|^2 and the reach link 3 must come
+ * within (plus the float directions' error). */
+struct elbow_view {
+    double wu, wz, d2, reach;
+};
+
+/* 0: link 3 cannot reach the disc for any psi; 2: it touches it for every
+ * psi; 1: it depends on psi (v is filled in). */
+static int view_from_elbow(const struct qrt_raster *r, int is,
+                           const struct plane *pl, struct elbow_view *v)
+{
+    double far;
+    v->wu = pl->cu - r->elbow[is][0];
+    v->wz = pl->z - r->elbow[is][1];
+    v->d2 = v->wu * v->wu + v->wz * v->wz;
+    v->reach = pl->reach3 + r->sector_eps;
+    far = r->arm->link_m[2] + v->reach;
+    if (v->d2 > far * far)
+        return 0;
+    if (v->d2 <= v->reach * v->reach)
+        return 2;
+    return 1;
+}
+
+/* Directions start (rotated by -2h) and end (rotated by +2h) of psi nodes
+ * j0 and j1: the edges of the sector link 3 sweeps over those nodes' psi
+ * ranges. */
+static void sector_edges(const struct qrt_raster *r, int j0, int j1,
+                         double edge[4])
+{
+    const float *d0 = r->psi_dir[j0], *d1 = r->psi_dir[j1];
+    edge[0] = d0[0] * r->cos_2h + d0[1] * r->sin_2h;
+    edge[1] = d0[1] * r->cos_2h - d0[0] * r->sin_2h;
+    edge[2] = d1[0] * r->cos_2h - d1[1] * r->sin_2h;
+    edge[3] = d1[1] * r->cos_2h + d1[0] * r->sin_2h;
+}
+
+/* Does the sector between the edges (radius L3 from the elbow, spanning
+ * less than half a turn) come within v->reach of the disc? Asked only
+ * where view_from_elbow said 1. */
+static int sector_meets(const struct qrt_raster *r, const double edge[4],
+                        const struct elbow_view *v)
 {
     const double len = r->arm->link_m[2];
-    const float *dir = r->psi_dir[is + ie];
-    double c = dir[0], s = dir[1], edge[4];
-    double wu = pl->cu - r->elbow[is][0], wz = pl->z - r->elbow[is][1];
-    double reach = pl->reach3 + r->sector_eps, d2 = wu * wu + wz * wz;
-    double far = len + reach;
+    /* how far the disc's centre lies inside each edge's line (the edges
+     * are unit vectors to within 2e-7, hence the slack) */
+    double inside[2], out = -v->reach * (1.0 + 1e-6);
     int k;
-    if (d2 > far * far)
+    inside[0] = edge[0] * v->wz - edge[1] * v->wu;
+    inside[1] = v->wu * edge[3] - v->wz * edge[2];
+    if (inside[0] >= 0.0 && inside[1] >= 0.0)
+        return 1; /* between the edges, and within len + reach */
+    /* the sector lies inside both lines: a disc beyond one misses it */
+    if (inside[0] < out || inside[1] < out)
         return 0;
-    if (d2 <= reach * reach)
-        return 1;
-    /* the edges: psi_j rotated by -2h and by +2h */
-    edge[0] = c * r->cos_2h + s * r->sin_2h;
-    edge[1] = s * r->cos_2h - c * r->sin_2h;
-    edge[2] = c * r->cos_2h - s * r->sin_2h;
-    edge[3] = s * r->cos_2h + c * r->sin_2h;
-    /* between the edges (the sector spans less than half a turn) */
-    if (edge[0] * wz - edge[1] * wu >= 0.0 &&
-        wu * edge[3] - wz * edge[2] >= 0.0)
-        return 1;
-    for (k = 0; k < 2; k++) { /* else the nearer edge segment decides */
+    for (k = 0; k < 2; k++) { /* else the edge segment it is outside of */
         double eu = edge[2 * k], ez = edge[2 * k + 1];
-        double t = wu * eu + wz * ez, du, dz;
+        double t = v->wu * eu + v->wz * ez, du, dz;
+        if (inside[k] >= 0.0)
+            continue;
         t = t < 0.0 ? 0.0 : (t > len ? len : t);
-        du = wu - t * eu;
-        dz = wz - t * ez;
-        if (du * du + dz * dz <= reach * reach)
+        du = v->wu - t * eu;
+        dz = v->wz - t * ez;
+        if (du * du + dz * dz <= v->reach * v->reach)
             return 1;
     }
     return 0;
 }
 
+/* The open nodes a..b of a row (b - a < SECTOR_SPAN_MAX), node by node:
+ * a node is blocked if link 3, with psi anywhere in the node's range
+ * psi_j +- 2h (j = is + ie), comes within a member's reach, the question
+ * link3_row_ranges answers for a whole row with approximate angles asked
+ * exactly of one node. A member the sector of all of a..b misses is not
+ * asked of each node. */
+static void mark_edge_nodes(const struct qrt_raster *r, int is, int a, int b,
+                            const struct plane *mpl, int m, uint64_t *row)
+{
+    double all[4];
+    int j, ie, span_ok = (b - a) * r->g + 4.0 * r->h < QRT_PI - 1e-6;
+    if (span_ok)
+        sector_edges(r, is + a, is + b, all);
+    for (j = 0; j < m; j++) {
+        struct elbow_view v;
+        int seen;
+        if (!mpl[j].hit3)
+            continue;
+        seen = view_from_elbow(r, is, &mpl[j], &v);
+        if (seen == 0 || (seen == 1 && span_ok && !sector_meets(r, all, &v)))
+            continue;
+        for (ie = a; ie <= b; ie++) {
+            double edge[4];
+            if (bit_set(row, ie))
+                continue;
+            if (seen == 1) {
+                sector_edges(r, is + ie, is + ie, edge);
+                if (!sector_meets(r, edge, &v))
+                    continue;
+            }
+            row[ie >> 6] |= 1ULL << (ie & 63);
+        }
+    }
+}
+
+/* Is any of bits a..b (a <= b) of a row clear? */
+static int range_open(const uint64_t *row, int a, int b)
+{
+    int wa = a >> 6, wb = b >> 6, w;
+    uint64_t first = ~0ULL << (a & 63), last = ~0ULL >> (63 - (b & 63));
+    if (wa == wb)
+        return (~row[wa] & first & last) != 0;
+    if (~row[wa] & first)
+        return 1;
+    for (w = wa + 1; w < wb; w++)
+        if (~row[w])
+            return 1;
+    return (~row[wb] & last) != 0;
+}
+
 /* The nodes of the ranges not marked yet: their hull [*a, *b]; returns
- * whether there are any. */
+ * whether there are any. Most ranges are marked whole already, which a
+ * word at a time tells first. */
 static int open_nodes(const uint64_t *row, int ranges[3][2], int n, int *a,
                       int *b)
 {
-    int i, ie;
+    int i, ie, any = 0;
+    for (i = 0; i < n && !any; i++)
+        any = range_open(row, ranges[i][0], ranges[i][1]);
+    if (!any)
+        return 0;
     *a = QRT_MAX_NE;
     *b = -1;
     for (i = 0; i < n; i++)
@@ -623,12 +708,7 @@ void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
                 /* a few nodes at the edge of what is blocked: no member
                  * can truly block one outside the ball's range, so only
                  * these are asked of each member */
-                int ie;
-                for (j = 0; j < m; j++)
-                    for (ie = a; mpl[j].hit3 && ie <= b; ie++)
-                        if (!bit_set(row, ie) &&
-                            sector_hits(r, is, ie, &mpl[j]))
-                            row[ie >> 6] |= 1ULL << (ie & 63);
+                mark_edge_nodes(r, is, a, b, mpl, m, row);
                 continue;
             }
             for (j = 0; j < m; j++) {
