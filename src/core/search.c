@@ -192,7 +192,8 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
     float dir_cost[26];
     double best = HUGE_VAL;
     struct estimate est;
-    int offsets[26][3], d;
+    long delta[26];
+    int offsets[26][3], d, inside;
 
     for (d = 0; d < 26; d++) {
         int moved;
@@ -200,6 +201,9 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
         moved =
             (offsets[d][0] != 0) + (offsets[d][1] != 0) + (offsets[d][2] != 0);
         dir_cost[d] = (float)(lat->grid_deg * sqrt((double)moved));
+        delta[d] =
+            ((long)offsets[d][0] * lat->n[1] + offsets[d][1]) * lat->n[2] +
+            offsets[d][2];
     }
     if (!pl->lazy)
         pl->lazy_kept = 0; /* the heap may use the whole array */
@@ -245,14 +249,26 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
             res->cost = best;
         }
         qrt_lattice_coords(lat, u, ijk);
+        /* off every face of the lattice, no neighbour leaves it or wraps:
+         * its index is an offset from u */
+        inside = ijk[0] > 0 && ijk[0] < lat->n[0] - 1 && ijk[1] > 0 &&
+                 ijk[1] < lat->n[1] - 1 && ijk[2] > 0 && ijk[2] < lat->n[2] - 1;
         for (d = 0; d < 26; d++) {
             int nb[3];
-            long v = neighbour(lat, ijk, offsets[d], nb);
+            long v;
             float g;
-            if (v < 0 || pl->heap_pos[v] == -2)
+            if (inside) {
+                nb[0] = ijk[0] + offsets[d][0];
+                nb[1] = ijk[1] + offsets[d][1];
+                nb[2] = ijk[2] + offsets[d][2];
+                v = u + delta[d];
+            } else if ((v = neighbour(lat, ijk, offsets[d], nb)) < 0) {
+                continue;
+            }
+            if (pl->heap_pos[v] == -2)
                 continue;
             qrt_lazy_need(pl, nb[0], nb[1]);
-            if (qrt_mask_blocked(&pl->mask, nb))
+            if ((pl->mask.rows[nb[0]][nb[1]][nb[2] >> 6] >> (nb[2] & 63)) & 1U)
                 continue;
             g = pl->search.dist[u] + dir_cost[d];
             if (pl->heap_pos[v] >= 0 && pl->search.dist[v] <= g)
