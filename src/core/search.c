@@ -166,7 +166,7 @@ static int goal_slot(const struct qrt_ends *goals, long node)
 
 /* Neighbour of ijk in direction off, or -1 outside the lattice. */
 static long neighbour(const struct qrt_lattice *lat, const int ijk[3],
-                      const int off[3], int out[3])
+                      const signed char off[3], int out[3])
 {
     int j;
     for (j = 0; j < 3; j++) {
@@ -192,18 +192,20 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
     float dir_cost[26];
     double best = HUGE_VAL;
     struct estimate est;
-    long delta[26];
-    int offsets[26][3], d, inside;
+    /* small types: this frame lies under every row build (stack budget) */
+    int32_t delta[26];
+    signed char offsets[26][3];
+    int d, inside;
 
     for (d = 0; d < 26; d++) {
-        int moved;
-        qrt_search_direction(d, offsets[d]);
-        moved =
-            (offsets[d][0] != 0) + (offsets[d][1] != 0) + (offsets[d][2] != 0);
+        int off[3], moved, j;
+        qrt_search_direction(d, off);
+        for (j = 0; j < 3; j++)
+            offsets[d][j] = (signed char)off[j];
+        moved = (off[0] != 0) + (off[1] != 0) + (off[2] != 0);
         dir_cost[d] = (float)(lat->grid_deg * sqrt((double)moved));
         delta[d] =
-            ((long)offsets[d][0] * lat->n[1] + offsets[d][1]) * lat->n[2] +
-            offsets[d][2];
+            (int32_t)(((long)off[0] * lat->n[1] + off[1]) * lat->n[2] + off[2]);
     }
     if (!pl->lazy)
         pl->lazy_kept = 0; /* the heap may use the whole array */
