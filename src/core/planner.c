@@ -233,15 +233,23 @@ static void try_end(struct qrt_planner *pl, const double q[3], int ijk[3],
     ends->count++;
 }
 
+/* How many cells away from its nearest node a start or goal may be joined
+ * to the lattice: past the 26 neighbours, shells 2 and 3 are tried, each
+ * only when the one inside it gave nothing (and, as in the first, the
+ * first node that joins is taken). The cells are conservative, so near a
+ * surface many are blocked, and a free end amid them is otherwise
+ * stranded. */
+#define JOIN_SHELLS 3
+
 /* Lattice nodes that q can be joined to: the corners of the grid cell
  * holding q, or, when none of those is free and reachable (q close to an
- * obstacle), the 26 neighbours of its nearest node. */
+ * obstacle), the nodes around its nearest node, shell by shell. */
 static void collect_ends(struct qrt_planner *pl, const double q[3],
                          struct qrt_ends *ends)
 {
     const struct qrt_lattice *lat = &pl->mask.lat;
     double radius[3], x[3];
-    int lo[3], near[3], j, c;
+    int lo[3], near[3], j, c, shell;
     exact_radii(pl, radius);
     ends->count = 0;
     for (j = 0; j < 3; j++) {
@@ -259,10 +267,20 @@ static void collect_ends(struct qrt_planner *pl, const double q[3],
             continue;
         try_end(pl, q, ijk, radius, ends);
     }
-    for (c = 0; c < 27 && ends->count == 0; c++) {
-        int ijk[3] = {near[0] + c / 9 - 1, near[1] + (c / 3) % 3 - 1,
-                      near[2] + c % 3 - 1};
-        try_end(pl, q, ijk, radius, ends);
+    for (shell = 1; shell <= JOIN_SHELLS && ends->count == 0; shell++) {
+        int side = 2 * shell + 1, cube = side * side * side;
+        for (c = 0; c < cube && ends->count == 0; c++) {
+            int d[3], ijk[3];
+            d[0] = c / (side * side) - shell;
+            d[1] = (c / side) % side - shell;
+            d[2] = c % side - shell;
+            if (d[0] * d[0] < shell * shell && d[1] * d[1] < shell * shell &&
+                d[2] * d[2] < shell * shell)
+                continue; /* inside: an earlier shell */
+            for (j = 0; j < 3; j++)
+                ijk[j] = near[j] + d[j];
+            try_end(pl, q, ijk, radius, ends);
+        }
     }
 }
 

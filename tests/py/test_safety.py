@@ -89,3 +89,25 @@ def test_waypoints_on_a_joint_limit_are_printed_inside_it(qrtplan):
     # limit, and waypoints printed to 10 digits landed 2e-9 degrees outside
     family, seed, status, msg = run_one(("varied", 6054))
     assert status == "ok", (status, msg)
+
+
+def test_a_free_goal_amid_blocked_cells_is_joined_from_further_out(qrtplan,
+                                                                    tmp_path):
+    # the third shelf of tools/bench_compare.py: the goal is free (oracle
+    # clearance 14.8 mm), but the cells round it are blocked and no node of
+    # its cell or its 26 neighbours joins it; joined from two or three
+    # cells out, it is planned (it was goal_blocked before)
+    scene = scenes.make_scene("shelf", 1003)
+    pts = np.asarray(scene["points"], float)
+    arm = oracle.Arm(scene)
+    assert oracle.clearances(arm, [scene["goal"]["joints_deg"]], pts)[0] > 0.01
+    path = tmp_path / "shelf.json"
+    path.write_text(json.dumps(scene))
+    for mode in ([], ["--as-read"]):
+        r = subprocess.run([str(BIN), "plan", str(path)] + mode,
+                           capture_output=True, text=True, timeout=60)
+        assert r.returncode == 0, r.stderr
+        plan = json.loads(r.stdout)
+        assert plan["status"] == "ok", (mode, plan["status"], plan["detail"])
+        res = oracle.check_path(scene, plan, pts)
+        assert res.safe, (mode, str(res))
