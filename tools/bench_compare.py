@@ -44,21 +44,68 @@ def make_scenes(out, seeds, qrtplan, smoke):
     families = {"confined box": "box", "tunnel": "tunnel", "shelf": "shelf",
                 "clutter": "spheres"}
     for label, fam in families.items():
-        for seed in range(1 if smoke else seeds):
+        kept, seed = 0, 0
+        while kept < (1 if smoke else seeds):
             sc = scenes.make_scene(fam, 1000 + seed)
             if label == "clutter":  # dense: five times the random spheres
                 more = [scenes.make_scene(fam, 5000 + 7 * seed + i)["points"]
                         for i in range(4)]
                 sc["points"] = sc["points"] + sum(more, [])
-            path = os.path.join(out, f"{fam}_{seed}.json")
+            seed += 1
+            # a race needs a start and a goal that are free; the random
+            # families draw them blind, so the oracle says which are
+            why = unposed(sc)
+            if why:
+                print(f"{label}: seed {seed - 1} left out: {why}", file=sys.stderr)
+                continue
+            path = os.path.join(out, f"{fam}_{seed - 1}.json")
             with open(path, "w") as f:
                 json.dump(sc, f)
             made.append((label, path))
-            if smoke:
-                break
+            kept += 1
         if smoke:
             break
     return made
+
+
+def ik_branches(arm, xyz):
+    """Every joint solution (degrees, within the limits) that puts the tip
+    at xyz: alpha toward the point or away from it, the elbow either way
+    (design.md section 3), each confirmed by the oracle's own kinematics."""
+    l1, l2, l3 = arm.links
+    x, y, z = xyz
+    out = []
+    for flip in (0.0, np.pi):
+        a = np.arctan2(y, x) + flip
+        u = np.hypot(x, y) * (1.0 if flip == 0.0 else -1.0) - l1
+        c = (u * u + z * z - l2 * l2 - l3 * l3) / (2 * l2 * l3)
+        if abs(c) > 1.0:
+            continue
+        for e in (np.arccos(c), -np.arccos(c)):
+            s = np.arctan2(z, u) - np.arctan2(l3 * np.sin(e), l2 + l3 * np.cos(e))
+            q = [oracle.wrap180(np.degrees(v)) for v in (a, s, e)]
+            if not all(lo <= v <= hi for v, (lo, hi) in zip(q, arm.limits)):
+                continue
+            if np.linalg.norm(arm.joints(q)[0, -1] - np.asarray(xyz)) < 1e-6:
+                out.append(q)
+    return out
+
+
+def unposed(sc):
+    """Why the scene's start or goal is no race (both collide or lie out of
+    reach for every branch), or None."""
+    arm = oracle.Arm(sc)
+    pts = np.asarray(sc["points"], float)
+    for end in ("start", "goal"):
+        t = sc[end]
+        qs = [t["joints_deg"]] if "joints_deg" in t else ik_branches(arm, t["xyz_m"])
+        if not qs:
+            return f"the {end} is out of reach"
+        c = oracle.clearances(arm, qs, pts)
+        if c.max() < 0.0:
+            return (f"the {end} collides (oracle clearance "
+                    f"{1000 * c.max():.1f} mm)")
+    return None
 
 
 def check_oracle(scene_path, waypoints, cache={}):

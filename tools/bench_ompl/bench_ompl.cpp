@@ -327,9 +327,23 @@ int main(int argc, char **argv)
             std::fprintf(csv, "%s,qrtplan,%d,%d,%.4f,%.4f,%zu,\"%s\"\n",
                          scenes[si], rep, ok, ms, ok ? plan.cost_deg : 0.0,
                          w.size(), path_json(w).c_str());
+            // a start or goal qrtplan cannot connect (blocked, or free but
+            // stranded off the lattice) is its failure, not the scene's:
+            // OMPL gets the same joints. Only with no joints at all (out of
+            // reach, a bad request) is there nothing to compare.
             if (plan.status != QRT_STATUS_OK &&
-                plan.status != QRT_STATUS_NO_PATH)
-                break; // start or goal blocked/unreachable: nothing to compare
+                plan.status != QRT_STATUS_NO_PATH &&
+                plan.status != QRT_STATUS_START_BLOCKED &&
+                plan.status != QRT_STATUS_GOAL_BLOCKED)
+                break;
+            if (plan.status == QRT_STATUS_START_BLOCKED) {
+                // the goal was never resolved: only a goal in joints is
+                // known without qrtplan's IK choice
+                if (sc.goal.kind != QRT_TARGET_JOINTS)
+                    break;
+                for (int k = 0; k < 3; k++)
+                    plan.goal_deg[k] = sc.goal.value[k];
+            }
             // OMPL, the index built inside the timed part as ours converts
             for (const char *name : planners) {
                 if (!std::strcmp(name, "RRTstar") && rep > 0)
