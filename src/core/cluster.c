@@ -85,3 +85,26 @@ void qrt_cluster_points(const float (*pts)[3], long n, double cell_m,
                 visit(ctx, members, m);
         }
 }
+
+double qrt_cluster_cell_for(long n, long groups)
+{
+    if (groups > 0 && n < (long)QRT_CLUSTER_SPARSE_MEAN * groups)
+        return 2.0 * QRT_CLUSTER_CELL_M;
+    return QRT_CLUSTER_CELL_M;
+}
+
+static void count_group(void *ctx, const int32_t *members, int m)
+{
+    (void)members;
+    (void)m;
+    ++*(long *)ctx;
+}
+
+long qrt_cluster_count(const float (*pts)[3], long n, double cell_m,
+                       int max_members, int32_t *scratch)
+{
+    long groups = 0;
+    qrt_cluster_points(pts, n, cell_m, max_members, scratch, count_group,
+                       &groups);
+    return groups;
+}

@@ -11,6 +11,11 @@
 #define QRT_CLUSTER_CELL_M 0.04
 #endif
 
+/* Points this far apart on average fall one to a cube of QRT_CLUSTER_CELL_M
+ * and share no work: fewer than QRT_CLUSTER_SPARSE_MEAN points per group
+ * there, and the cubes are made twice as large. */
+#define QRT_CLUSTER_SPARSE_MEAN 2
+
 typedef void (*qrt_cluster_visit)(void *ctx, const int32_t *members, int m);
 
 /* Scratch entries qrt_cluster_points needs for n points. */
@@ -22,5 +27,13 @@ long qrt_cluster_scratch_len(long n);
 void qrt_cluster_points(const float (*pts)[3], long n, double cell_m,
                         int max_members, int32_t *scratch,
                         qrt_cluster_visit visit, void *ctx);
+
+/* The cube edge for n points that make `groups` groups in cubes of
+ * QRT_CLUSTER_CELL_M (both builds of the mask take the same). */
+double qrt_cluster_cell_for(long n, long groups);
+
+/* How many groups qrt_cluster_points makes (the same arguments, no visit). */
+long qrt_cluster_count(const float (*pts)[3], long n, double cell_m,
+                       int max_members, int32_t *scratch);
 
 #endif

@@ -43,6 +43,7 @@ static void keep_cluster(void *ctx, const int32_t *members, int m)
 int qrt_lazy_begin(struct qrt_planner *pl, struct qrt_raster *r)
 {
     struct keep_ctx k;
+    double cell;
     int w;
     pl->lazy = 0;
     pl->lazy_kept = 0;
@@ -59,6 +60,16 @@ int qrt_lazy_begin(struct qrt_planner *pl, struct qrt_raster *r)
     qrt_cluster_points((const float(*)[3])pl->points.xyz, pl->points.count,
                        QRT_CLUSTER_CELL_M, QRT_CLUSTER_MAX, pl->heap_pos,
                        keep_cluster, &k);
+    cell = qrt_cluster_cell_for(pl->points.count, pl->lazy_clusters);
+    if (k.ok && cell != QRT_CLUSTER_CELL_M) {
+        /* a sparse cloud: the larger cubes a whole build takes too (link
+         * 1's slabs, rastered while keeping, come out the same again) */
+        pl->lazy_clusters = 0;
+        k.members = 0;
+        qrt_cluster_points((const float(*)[3])pl->points.xyz, pl->points.count,
+                           cell, QRT_CLUSTER_MAX, pl->heap_pos, keep_cluster,
+                           &k);
+    }
     if (!k.ok)
         return 0;
     pl->lazy_raster = r;

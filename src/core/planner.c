@@ -134,10 +134,15 @@ static void raster_part(struct qrt_planner *pl, int part, int nparts,
     scratch = part == 0 ? pl->heap_pos : pl->search.cluster_scratch;
     if (qrt_cluster_scratch_len(pl->points.count) <= QRT_MAX_NODES) {
         struct cluster_ctx ctx;
+        double cell;
         ctx.raster = &r;
         ctx.pts = (const float(*)[3])pl->points.xyz;
-        qrt_cluster_points(ctx.pts, pl->points.count, QRT_CLUSTER_CELL_M,
-                           QRT_CLUSTER_MAX, scratch, raster_cluster, &ctx);
+        cell = qrt_cluster_cell_for(
+            pl->points.count,
+            qrt_cluster_count(ctx.pts, pl->points.count, QRT_CLUSTER_CELL_M,
+                              QRT_CLUSTER_MAX, scratch));
+        qrt_cluster_points(ctx.pts, pl->points.count, cell, QRT_CLUSTER_MAX,
+                           scratch, raster_cluster, &ctx);
     } else {
         for (i = 0; i < pl->points.count; i++) {
             double p[3];
