@@ -374,10 +374,10 @@ static int bit_set(const uint64_t *row, int i)
 }
 
 /* A disc (a member's plane) as seen from the elbow of one sigma row: its
- * centre w relative to the elbow, d2 = |w|^2 and the reach link 3 must come
- * within (plus the float directions' error). */
+ * centre w relative to the elbow and the reach link 3 must come within
+ * (plus the float directions' error). */
 struct elbow_view {
-    double wu, wz, d2, reach;
+    double wu, wz, reach;
 };
 
 /* 0: link 3 cannot reach the disc for any psi; 2: it touches it for every
@@ -385,15 +385,15 @@ struct elbow_view {
 static int view_from_elbow(const struct qrt_raster *r, int is,
                            const struct plane *pl, struct elbow_view *v)
 {
-    double far;
+    double far, d2;
     v->wu = pl->cu - r->elbow[is][0];
     v->wz = pl->z - r->elbow[is][1];
-    v->d2 = v->wu * v->wu + v->wz * v->wz;
     v->reach = pl->reach3 + r->sector_eps;
+    d2 = v->wu * v->wu + v->wz * v->wz;
     far = r->arm->link_m[2] + v->reach;
-    if (v->d2 > far * far)
+    if (d2 > far * far)
         return 0;
-    if (v->d2 <= v->reach * v->reach)
+    if (d2 <= v->reach * v->reach)
         return 2;
     return 1;
 }
@@ -478,30 +478,31 @@ static void mark_edge_nodes(const struct qrt_raster *r, int is, int a, int b,
     }
 }
 
-/* Is any of bits a..b (a <= b) of a row clear? */
-static int range_open(const uint64_t *row, int a, int b)
+/* Any bit lo .. hi - 1 of the set, each taken flipped by flip (~0: any
+ * clear bit)? A word at a time. */
+static int any_bit(const uint64_t *set, long lo, long hi, uint64_t flip)
 {
-    int wa = a >> 6, wb = b >> 6, w;
-    uint64_t first = ~0ULL << (a & 63), last = ~0ULL >> (63 - (b & 63));
-    if (wa == wb)
-        return (~row[wa] & first & last) != 0;
-    if (~row[wa] & first)
-        return 1;
-    for (w = wa + 1; w < wb; w++)
-        if (~row[w])
+    while (lo < hi) {
+        long w = lo >> 6, end = (w + 1) << 6;
+        uint64_t bits = (set[w] ^ flip) >> (lo & 63);
+        if (end > hi) /* only hi - lo of them */
+            bits &= ~0ULL >> (64 - (hi - lo));
+        if (bits)
             return 1;
-    return (~row[wb] & last) != 0;
+        lo = end;
+    }
+    return 0;
 }
 
 /* The nodes of the ranges not marked yet: their hull [*a, *b]; returns
- * whether there are any. Most ranges are marked whole already, which a
- * word at a time tells first. */
+ * whether there are any. Most ranges are marked whole already, which
+ * any_bit tells first. */
 static int open_nodes(const uint64_t *row, int ranges[3][2], int n, int *a,
                       int *b)
 {
     int i, ie, any = 0;
     for (i = 0; i < n && !any; i++)
-        any = range_open(row, ranges[i][0], ranges[i][1]);
+        any = any_bit(row, ranges[i][0], ranges[i][1] + 1L, ~0ULL);
     if (!any)
         return 0;
     *a = QRT_MAX_NE;
@@ -746,21 +747,6 @@ void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
             qrt_raster_cluster_at(r, pts, members, mrho, &g, ia);
 }
 
-/* Any bit lo .. hi - 1 of the set? */
-static int any_bit(const uint64_t *set, long lo, long hi)
-{
-    while (lo < hi) {
-        long w = lo >> 6, end = (w + 1) << 6;
-        uint64_t bits = set[w] >> (lo & 63);
-        if (end > hi) /* only hi - lo of them */
-            bits &= ~0ULL >> (64 - (hi - lo));
-        if (bits)
-            return 1;
-        lo = end;
-    }
-    return 0;
-}
-
 void qrt_raster_only_rows(struct qrt_raster *r, const uint64_t *rows)
 {
     int ia;
@@ -768,7 +754,7 @@ void qrt_raster_only_rows(struct qrt_raster *r, const uint64_t *rows)
     for (ia = 0; ia < r->mask->lat.n[0]; ia++) {
         long first = (long)ia * QRT_MAX_NS;
         r->alpha_wanted[ia] = 0;
-        if (!rows || any_bit(rows, first, first + r->mask->lat.n[1]))
+        if (!rows || any_bit(rows, first, first + r->mask->lat.n[1], 0))
             r->alpha_wanted[ia] = 1;
     }
 }
