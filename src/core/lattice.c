@@ -5,6 +5,8 @@
 
 #include "qrtplan/status.h"
 
+#include "mask_bit.h"
+
 static const int max_nodes[3] = {QRT_MAX_NA, QRT_MAX_NS, QRT_MAX_NE};
 
 int qrt_lattice_init(struct qrt_lattice *lat, const struct qrt_arm *arm,
@@ -63,8 +65,7 @@ void qrt_lattice_joints(const struct qrt_lattice *lat, const int ijk[3],
 
 int qrt_mask_blocked(const struct qrt_mask *mask, const int ijk[3])
 {
-    return (int)((mask->rows[ijk[0]][ijk[1]][ijk[2] >> 6] >> (ijk[2] & 63)) &
-                 1u);
+    return qrt_mask_bit(mask, ijk);
 }
 
 int qrt_mask_blocked_index(const struct qrt_mask *mask, long index)

@@ -10,6 +10,7 @@
 
 #include "geom.h"
 #include "lazy.h"
+#include "mask_bit.h"
 
 void qrt_search_direction(int dir, int offset[3])
 {
@@ -270,7 +271,7 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
             if (pl->heap_pos[v] == -2)
                 continue;
             qrt_lazy_need(pl, nb[0], nb[1]);
-            if ((pl->mask.rows[nb[0]][nb[1]][nb[2] >> 6] >> (nb[2] & 63)) & 1U)
+            if (qrt_mask_bit(&pl->mask, nb))
                 continue;
             g = pl->search.dist[u] + dir_cost[d];
             if (pl->heap_pos[v] >= 0 && pl->search.dist[v] <= g)
