@@ -81,17 +81,49 @@ struct qrt_cluster_geom {
     uint64_t alpha[QRT_ALPHA_WORDS]; /* alpha nodes it may block */
 };
 
+/* A disc in the arm's vertical plane at one alpha node (its centre from the
+ * shoulder, radial and height) that link 3 must come within reach3 of to
+ * touch a point or a cluster; reach3 < 0: link 3 cannot touch it there.
+ * Floats, so that more of them fit: reach3 is rounded up by the centre's
+ * rounding. */
+struct qrt_disc {
+    float cu, z, reach3;
+};
+
+/* What a cluster looks like at one alpha node, kept while rows are built as
+ * they are read: its bounding ball's disc, the sigma rows link 3 may reach
+ * there (less those its link 2 blocks whole), and where its members' discs
+ * are kept once they have been asked for (-1: not kept). */
+#define QRT_SIGMA_WORDS ((QRT_MAX_NS + 63) / 64)
+struct qrt_alpha_view {
+    struct qrt_disc disc;
+    uint64_t rows[QRT_SIGMA_WORDS];
+    int32_t cluster, members_at;
+};
+
 /* The clusters qrt_planner_plan_now keeps while it searches, in the tail of
  * the heap array: at most 11 bytes of every 16 (QRT_LAZY_HEAP entries stay
  * for the heap; should it need more, the rest of the mask is built and the
  * clusters given up). More clusters or points than this: the whole mask is
- * built first instead. */
+ * built first instead. The slots the clusters leave free keep their views
+ * of the alpha nodes rows are built on (as many as fit; when they are full,
+ * the views are forgotten and made again as needed). */
 #define QRT_LAZY_MAX_CLUSTERS                                                  \
     (QRT_MAX_POINTS < QRT_MAX_NODES / 16 ? QRT_MAX_POINTS : QRT_MAX_NODES / 16)
 #define QRT_LAZY_MAX_POINTS                                                    \
     (QRT_MAX_POINTS < QRT_MAX_NODES / 8 ? QRT_MAX_POINTS : QRT_MAX_NODES / 8)
-struct qrt_lazy_clusters {
+#define QRT_LAZY_TABLE_BYTES                                                   \
+    ((long)QRT_LAZY_MAX_CLUSTERS * (long)sizeof(struct qrt_cluster_geom))
+/* The kept clusters from its start; in the bytes they leave free, views
+ * and member discs. */
+union qrt_lazy_table {
     struct qrt_cluster_geom geom[QRT_LAZY_MAX_CLUSTERS];
+    struct qrt_alpha_view
+        view[QRT_LAZY_TABLE_BYTES / (long)sizeof(struct qrt_alpha_view)];
+    struct qrt_disc disc[QRT_LAZY_TABLE_BYTES / (long)sizeof(struct qrt_disc)];
+};
+struct qrt_lazy_clusters {
+    union qrt_lazy_table t;
     double member_rho[QRT_LAZY_MAX_POINTS]; /* each member's distance from
                                                the base axis */
     int32_t members[QRT_LAZY_MAX_POINTS];
@@ -134,7 +166,16 @@ struct qrt_planner {
      * points in the table (after qrt_planner_check_path_now or _plan_now),
      * so the next qrt_planner_plan_now starts from them */
     int lazy_kept;
-    long lazy_clusters;             /* in open.lazy.clusters */
+    long lazy_clusters; /* in open.lazy.clusters */
+    /* the views and discs kept lie in the table from the clusters' end to
+     * byte lazy_views_top; alpha node ia's views are the
+     * lazy_alpha_count[ia] from view lazy_alpha_first[ia] (-1: none) */
+    long lazy_views_top;
+    int32_t lazy_alpha_first[QRT_MAX_NA], lazy_alpha_count[QRT_MAX_NA];
+    /* since the clusters were kept: how often the views were all forgotten
+     * for want of room, rows built without views (an alpha node's did not
+     * fit at all) and member discs made without being kept */
+    long lazy_forgets, lazy_unviewed_rows, lazy_unkept_discs;
     struct qrt_raster *lazy_raster; /* on qrt_planner_plan_now's stack */
     uint64_t rows_ready[QRT_ROW_SET_WORDS];
 };

@@ -4,11 +4,43 @@
 #include "cluster.h"
 #include "raster.h"
 
-/* Sigma rows built together: the search reads rows in bunches, and every
- * build visits each cluster that may block the alpha node once. */
-#ifndef LAZY_BLOCK_ROWS
-#define LAZY_BLOCK_ROWS 8
+/* Most bytes the views and discs may take (tests set less, to take the
+ * ways out when they do not fit). */
+#ifndef QRT_LAZY_VIEW_BYTES
+#define QRT_LAZY_VIEW_BYTES QRT_LAZY_TABLE_BYTES
 #endif
+
+/* The table's bytes after the clusters. */
+static long clusters_end(const struct qrt_planner *pl)
+{
+    return pl->lazy_clusters * (long)sizeof(struct qrt_cluster_geom);
+}
+
+/* Forget every view and disc kept (the table's bytes after the clusters
+ * are free again). */
+static void forget_views(struct qrt_planner *pl)
+{
+    int ia;
+    pl->lazy_views_top = clusters_end(pl);
+    for (ia = 0; ia < QRT_MAX_NA; ia++) {
+        pl->lazy_alpha_first[ia] = -1;
+        pl->lazy_alpha_count[ia] = 0;
+    }
+}
+
+/* Room for n items of size bytes after lazy_views_top: the first one's
+ * index (the top moves past them), or -1. */
+static long table_take(struct qrt_planner *pl, long n, long size)
+{
+    long first = (pl->lazy_views_top + size - 1) / size;
+    long end = clusters_end(pl) + QRT_LAZY_VIEW_BYTES;
+    if (end > QRT_LAZY_TABLE_BYTES)
+        end = QRT_LAZY_TABLE_BYTES;
+    if ((first + n) * size > end)
+        return -1;
+    pl->lazy_views_top = (first + n) * size;
+    return first;
+}
 
 struct keep_ctx {
     struct qrt_planner *pl;
@@ -32,7 +64,7 @@ static void keep_cluster(void *ctx, const int32_t *members, int m)
         k->ok = 0;
         return;
     }
-    g = &c->geom[k->pl->lazy_clusters++];
+    g = &c->t.geom[k->pl->lazy_clusters++];
     qrt_raster_cluster_prepare(k->r, (const float(*)[3])k->pl->points.xyz,
                                members, m, g, c->member_rho + k->members);
     g->first = (int32_t)k->members;
@@ -72,6 +104,8 @@ int qrt_lazy_begin(struct qrt_planner *pl, struct qrt_raster *r)
     }
     if (!k.ok)
         return 0;
+    forget_views(pl);
+    pl->lazy_forgets = pl->lazy_unviewed_rows = pl->lazy_unkept_discs = 0;
     pl->lazy_raster = r;
     pl->lazy = 1;
     return 1;
@@ -83,45 +117,117 @@ static void mark_ready(struct qrt_planner *pl, int ia, int is)
     pl->rows_ready[bit >> 6] |= 1ULL << (bit & 63);
 }
 
-/* Every kept cluster that may block alpha node ia, in order, on the rows
- * the raster is restricted to. */
-static void raster_alpha(struct qrt_planner *pl, int ia)
+/* The kept clusters' views of alpha node ia, made now if they are not kept
+ * (forgetting all the others when the free bytes are too few). Returns the
+ * first view's index, or -1 when even all the free bytes cannot hold them. */
+static long alpha_views(struct qrt_planner *pl, int ia)
 {
-    const struct qrt_lazy_clusters *c = &pl->open.lazy.clusters;
+    const long size = (long)sizeof(struct qrt_alpha_view);
+    struct qrt_lazy_clusters *c = &pl->open.lazy.clusters;
     const float(*pts)[3] = (const float(*)[3])pl->points.xyz;
-    long i;
+    long i, n = 0, first, k = 0;
+    if (pl->lazy_alpha_first[ia] >= 0)
+        return pl->lazy_alpha_first[ia];
+    for (i = 0; i < pl->lazy_clusters; i++)
+        n += (c->t.geom[i].alpha[ia >> 6] >> (ia & 63)) & 1U;
+    first = table_take(pl, n, size);
+    if (first < 0) {
+        forget_views(pl);
+        pl->lazy_forgets++;
+        first = table_take(pl, n, size);
+    }
+    if (first < 0) {
+        pl->lazy_unviewed_rows++;
+        return -1;
+    }
     for (i = 0; i < pl->lazy_clusters; i++) {
-        const struct qrt_cluster_geom *g = &c->geom[i];
-        if ((g->alpha[ia >> 6] >> (ia & 63)) & 1U)
+        const struct qrt_cluster_geom *g = &c->t.geom[i];
+        struct qrt_alpha_view *v = &c->t.view[first + k];
+        if (((g->alpha[ia >> 6] >> (ia & 63)) & 1U) &&
+            qrt_raster_view_make(pl->lazy_raster, pts, c->members + g->first,
+                                 c->member_rho + g->first, g, ia, v)) {
+            v->cluster = (int32_t)i;
+            v->members_at = -1;
+            k++;
+        }
+    }
+    pl->lazy_views_top = (first + k) * size; /* the rest is free again */
+    pl->lazy_alpha_first[ia] = (int32_t)first;
+    pl->lazy_alpha_count[ia] = (int32_t)k;
+    return first;
+}
+
+/* The members' discs of view v: kept from the first time they are asked
+ * for, while the free bytes last; else made into scratch each time. */
+static const struct qrt_disc *member_discs(struct qrt_planner *pl, int ia,
+                                           struct qrt_alpha_view *v,
+                                           struct qrt_disc *scratch)
+{
+    struct qrt_lazy_clusters *c = &pl->open.lazy.clusters;
+    const struct qrt_cluster_geom *g = &c->t.geom[v->cluster];
+    struct qrt_disc *md = scratch;
+    long at;
+    if (v->members_at >= 0)
+        return &c->t.disc[v->members_at];
+    at = table_take(pl, g->m, (long)sizeof(struct qrt_disc));
+    if (at >= 0) {
+        v->members_at = (int32_t)at;
+        md = &c->t.disc[at];
+    } else {
+        pl->lazy_unkept_discs++;
+    }
+    qrt_raster_member_discs(pl->lazy_raster, (const float(*)[3])pl->points.xyz,
+                            c->members + g->first, c->member_rho + g->first,
+                            g->m, ia, md);
+    return md;
+}
+
+/* Row (ia, is) from every kept cluster that may block alpha node ia, in
+ * order, through their kept views. */
+static void build_row(struct qrt_planner *pl, int ia, int is)
+{
+    struct qrt_lazy_clusters *c = &pl->open.lazy.clusters;
+    struct qrt_disc scratch[QRT_CLUSTER_MAX];
+    long first, k;
+    qrt_raster_only_block(pl->lazy_raster, ia, is, is + 1);
+    first = alpha_views(pl, ia);
+    if (first < 0) { /* no room for the views: each cluster from scratch */
+        const float(*pts)[3] = (const float(*)[3])pl->points.xyz;
+        for (k = 0; k < pl->lazy_clusters; k++) {
+            const struct qrt_cluster_geom *g = &c->t.geom[k];
             qrt_raster_cluster_at(pl->lazy_raster, pts, c->members + g->first,
                                   c->member_rho + g->first, g, ia);
+        }
     }
+    for (k = 0; first >= 0 && k < pl->lazy_alpha_count[ia]; k++) {
+        struct qrt_alpha_view *v = &c->t.view[first + k];
+        int m, a, b;
+        if (!((v->rows[is >> 6] >> (is & 63)) & 1U))
+            continue; /* (asked again inside; most views miss the row) */
+        m = c->t.geom[v->cluster].m;
+        if (qrt_raster_view_row(pl->lazy_raster, v, m, ia, is, &a, &b))
+            qrt_raster_view_members(pl->lazy_raster, ia, is, a, b,
+                                    member_discs(pl, ia, v, scratch), m);
+    }
+    qrt_raster_only_block(pl->lazy_raster, -1, 0, 0);
+    mark_ready(pl, ia, is);
 }
 
 void qrt_lazy_build(struct qrt_planner *pl, int ia, int is)
 {
-    int n1 = pl->mask.lat.n[1], s0 = is - is % LAZY_BLOCK_ROWS, s1, s;
-    s1 = s0 + LAZY_BLOCK_ROWS < n1 ? s0 + LAZY_BLOCK_ROWS : n1;
-    qrt_raster_only_block(pl->lazy_raster, ia, s0, s1);
-    raster_alpha(pl, ia);
-    qrt_raster_only_block(pl->lazy_raster, -1, 0, 0);
-    for (s = s0; s < s1; s++)
-        mark_ready(pl, ia, s);
+    build_row(pl, ia, is);
 }
 
 void qrt_lazy_build_rows(struct qrt_planner *pl, const uint64_t *rows)
 {
-    uint64_t todo[QRT_ROW_SET_WORDS];
-    int w, ia;
-    for (w = 0; w < QRT_ROW_SET_WORDS; w++)
-        todo[w] = (rows ? rows[w] : ~0ULL) & ~pl->rows_ready[w];
-    qrt_raster_only_rows(pl->lazy_raster, todo);
+    int ia, is;
     for (ia = 0; ia < pl->mask.lat.n[0]; ia++)
-        if (pl->lazy_raster->alpha_wanted[ia])
-            raster_alpha(pl, ia);
-    qrt_raster_only_rows(pl->lazy_raster, NULL);
-    for (w = 0; w < QRT_ROW_SET_WORDS; w++)
-        pl->rows_ready[w] |= todo[w];
+        for (is = 0; is < pl->mask.lat.n[1]; is++) {
+            long bit = (long)ia * QRT_MAX_NS + is;
+            if ((!rows || ((rows[bit >> 6] >> (bit & 63)) & 1U)) &&
+                !qrt_lazy_ready(pl, ia, is))
+                build_row(pl, ia, is);
+        }
 }
 
 void qrt_lazy_finish(struct qrt_planner *pl)

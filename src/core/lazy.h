@@ -2,11 +2,14 @@
  *
  * The points are clustered once (qrt_lazy_begin) and the clusters kept in
  * the tail of the heap array; a row is built the first time it is read,
- * together with the rest of its block of LAZY_BLOCK_ROWS sigma rows, from
- * every cluster that may block its alpha node, in the order a whole build
- * takes them. A row's bits depend only on the operations on that row, in
- * that order (raster.h), so each row comes out bit for bit as
- * qrt_planner_build_mask makes it. */
+ * from every cluster that may block its alpha node, in the order a whole
+ * build takes them. A row's bits depend only on the operations on that
+ * row, in that order (raster.h), so each row comes out bit for bit as
+ * qrt_planner_build_mask makes it. What a cluster looks like at an alpha
+ * node (its view: the ball's disc, the rows link 3 may reach, its
+ * members' discs once asked for) is kept in the table's free bytes for the
+ * next row on that node; when they run out, the views are forgotten and
+ * made again as needed. */
 #ifndef QRT_CORE_LAZY_H
 #define QRT_CORE_LAZY_H
 
@@ -18,8 +21,15 @@
  * then build the whole mask instead. */
 int qrt_lazy_begin(struct qrt_planner *pl, struct qrt_raster *r);
 
-/* Build the block holding row (ia, is). */
+/* Build row (ia, is). */
 void qrt_lazy_build(struct qrt_planner *pl, int ia, int is);
+
+/* Is row (ia, is) there to read (built, or the mask is whole)? */
+static inline int qrt_lazy_ready(const struct qrt_planner *pl, int ia, int is)
+{
+    long bit = (long)ia * QRT_MAX_NS + is;
+    return !pl->lazy || ((pl->rows_ready[bit >> 6] >> (bit & 63)) & 1U);
+}
 
 /* Row (ia, is) built, if rows are being built as they are read. */
 static inline void qrt_lazy_need(struct qrt_planner *pl, int ia, int is)

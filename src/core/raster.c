@@ -256,7 +256,8 @@ static void trig_extremes(const struct qrt_raster *r, double cos_c,
  * the shoulder P1 at distance d, that every link-2 and link-3 contact must
  * come within reach2 / reach3 of. */
 struct plane {
-    double cu, z, d, reach2, reach3;
+    struct qrt_disc dc; /* for link 3 (reach3 < 0 where it cannot touch) */
+    double d, reach2;
     int hit2, hit3;
 };
 
@@ -265,7 +266,7 @@ struct plane {
 static int plane_at(const struct qrt_raster *r, int ia, const double p[3],
                     double rho, double extra, struct plane *pl)
 {
-    double cos_c = 1.0, sin_c = 0.0, sin_min, cos_min, cos_max, v, spread;
+    double cos_c = 1.0, sin_c = 0.0, sin_min, cos_min, cos_max, v, spread, cu;
     double rad2 = r->radius_m[1] + extra, rad3 = r->radius_m[2] + extra;
     if (rho > 0.0) { /* the point's bearing relative to the node's alpha */
         cos_c = (p[0] * r->alpha_cs[ia][0] + p[1] * r->alpha_cs[ia][1]) / rho;
@@ -277,14 +278,22 @@ static int plane_at(const struct qrt_raster *r, int ia, const double p[3],
     pl->hit3 = v < rad3;
     if (!pl->hit2 && !pl->hit3)
         return 0;
-    /* the point's radial coordinate seen from P1 spans cu +- spread */
-    pl->cu = 0.5 * rho * (cos_min + cos_max) - r->arm->link_m[0];
+    /* the point's radial coordinate seen from P1 spans cu +- spread; the
+     * disc's centre is kept as floats, and both reaches grow by what that
+     * rounding moved it */
+    cu = 0.5 * rho * (cos_min + cos_max) - r->arm->link_m[0];
     spread = 0.5 * rho * (cos_max - cos_min);
-    pl->z = p[2];
-    pl->d = sqrt(pl->cu * pl->cu + pl->z * pl->z);
+    pl->dc.cu = (float)cu;
+    pl->dc.z = (float)p[2];
+    spread += fabs(cu - (double)pl->dc.cu) + fabs(p[2] - (double)pl->dc.z);
+    pl->d = sqrt((double)pl->dc.cu * pl->dc.cu + (double)pl->dc.z * pl->dc.z);
     pl->reach2 = pl->hit2 ? sqrt(rad2 * rad2 - v * v) + spread : 0.0;
-    pl->reach3 =
-        pl->hit3 ? sqrt(rad3 * rad3 - v * v) + spread + r->elbow_shift : 0.0;
+    /* a float rounds off by under 2^-24 of itself: rounded up */
+    pl->dc.reach3 =
+        pl->hit3
+            ? (float)((sqrt(rad3 * rad3 - v * v) + spread + r->elbow_shift) *
+                      (1.0 + 2.4e-7))
+            : -1.0f;
     return 1;
 }
 
@@ -299,31 +308,32 @@ static int link2_rows(const struct qrt_raster *r, const struct plane *pl,
     w = sweep_half_width(pl->d, r->arm->link_m[1], pl->reach2);
     if (w < 0.0)
         return 0;
-    return angle_ranges(&r->axis[1], qrt_fast_atan2(pl->z, pl->cu), w + r->h,
-                        ranges);
+    return angle_ranges(&r->axis[1], qrt_fast_atan2(pl->dc.z, pl->dc.cu),
+                        w + r->h, ranges);
 }
 
 /* Link 2 (sigma only): rows it can hit are blocked whole. */
 static void raster_link2(const struct qrt_raster *r, int ia,
-                         const struct plane *pl, unsigned char *full)
+                         const struct plane *pl, uint64_t *full)
 {
     const struct qrt_lattice *lat = &r->mask->lat;
     int ranges[3][2], n = link2_rows(r, pl, ranges), i, is;
     for (i = 0; i < n; i++)
         for (is = ranges[i][0]; is <= ranges[i][1]; is++) {
             set_row_range(r->mask->rows[ia][is], 0, lat->n[2] - 1);
-            full[is] = 1;
+            full[is >> 6] |= 1ULL << (is & 63);
         }
 }
 
-/* Are all rows of alpha node ia in the index ranges blocked for every eta? */
+/* Are all rows of alpha node ia in the index ranges blocked for every eta?
+ * (Every row, built or not: a row blocked whole stays so.) */
 static int rows_full(const struct qrt_raster *r, int ia, int ranges[3][2],
                      int n)
 {
     int i, is, w;
     for (i = 0; i < n; i++)
         for (is = ranges[i][0]; is <= ranges[i][1]; is++)
-            for (w = 0; w < QRT_ROW_WORDS && wanted(r, ia, is); w++)
+            for (w = 0; w < QRT_ROW_WORDS; w++)
                 if ((r->mask->rows[ia][is][w] & r->full_row[w]) !=
                     r->full_row[w])
                     return 0;
@@ -335,25 +345,25 @@ static int link3_rows(const struct qrt_raster *r, const struct plane *pl,
                       int rows[3][2])
 {
     const double l2 = r->arm->link_m[1];
-    double far = r->arm->link_m[2] + pl->reach3, c;
+    double far = r->arm->link_m[2] + pl->dc.reach3, c;
     if (!pl->hit3 || pl->d > l2 + far)
         return 0;
     c = pl->d > 0.0 ? (pl->d * pl->d + l2 * l2 - far * far) / (2.0 * pl->d * l2)
                     : -2.0;
     if (c <= -1.0) /* law of cosines: every elbow position is near enough */
         return angle_ranges(&r->axis[1], 0.0, 4.0, rows);
-    return angle_ranges(&r->axis[1], qrt_fast_atan2(pl->z, pl->cu),
+    return angle_ranges(&r->axis[1], qrt_fast_atan2(pl->dc.z, pl->dc.cu),
                         qrt_fast_atan2(sqrt(1.0 - c * c), c) + ANG_EPS, rows);
 }
 
 /* Link 3 on sigma row is: the eta nodes whose psi = sigma + eta range
  * (+-2h over the box) meets the angles where link 3 comes within reach. */
 static int link3_row_ranges(const struct qrt_raster *r, int is,
-                            const struct plane *pl, int ranges[3][2])
+                            const struct qrt_disc *dc, int ranges[3][2])
 {
-    double du = pl->cu - r->elbow[is][0], dz = pl->z - r->elbow[is][1];
+    double du = dc->cu - r->elbow[is][0], dz = dc->z - r->elbow[is][1];
     double w = sweep_half_width(sqrt(du * du + dz * dz), r->arm->link_m[2],
-                                pl->reach3);
+                                dc->reach3);
     if (w < 0.0)
         return 0;
     return angle_ranges(&r->axis[2],
@@ -383,12 +393,12 @@ struct elbow_view {
 /* 0: link 3 cannot reach the disc for any psi; 2: it touches it for every
  * psi; 1: it depends on psi (v is filled in). */
 static int view_from_elbow(const struct qrt_raster *r, int is,
-                           const struct plane *pl, struct elbow_view *v)
+                           const struct qrt_disc *dc, struct elbow_view *v)
 {
     double far, d2;
-    v->wu = pl->cu - r->elbow[is][0];
-    v->wz = pl->z - r->elbow[is][1];
-    v->reach = pl->reach3 + r->sector_eps;
+    v->wu = dc->cu - r->elbow[is][0];
+    v->wz = dc->z - r->elbow[is][1];
+    v->reach = dc->reach3 + r->sector_eps;
     d2 = v->wu * v->wu + v->wz * v->wz;
     far = r->arm->link_m[2] + v->reach;
     if (d2 > far * far)
@@ -450,7 +460,7 @@ static int sector_meets(const struct qrt_raster *r, const double edge[4],
  * exactly of one node. A member the sector of all of a..b misses is not
  * asked of each node. */
 static void mark_edge_nodes(const struct qrt_raster *r, int is, int a, int b,
-                            const struct plane *mpl, int m, uint64_t *row)
+                            const struct qrt_disc *md, int m, uint64_t *row)
 {
     double all[4];
     int j, ie, span_ok = (b - a) * r->g + 4.0 * r->h < QRT_PI - 1e-6;
@@ -459,9 +469,9 @@ static void mark_edge_nodes(const struct qrt_raster *r, int is, int a, int b,
     for (j = 0; j < m; j++) {
         struct elbow_view v;
         int seen;
-        if (!mpl[j].hit3)
+        if (md[j].reach3 < 0.0)
             continue;
-        seen = view_from_elbow(r, is, &mpl[j], &v);
+        seen = view_from_elbow(r, is, &md[j], &v);
         if (seen == 0 || (seen == 1 && span_ok && !sector_meets(r, all, &v)))
             continue;
         for (ie = a; ie <= b; ie++) {
@@ -494,33 +504,57 @@ static int any_bit(const uint64_t *set, long lo, long hi, uint64_t flip)
     return 0;
 }
 
+/* Index of the lowest set bit of x (x != 0), by a de Bruijn sequence (the
+ * core uses no compiler builtins). */
+static int lowest_bit(uint64_t x)
+{
+    static const unsigned char at[64] = {
+        0,  1,  48, 2,  57, 49, 28, 3,  61, 58, 50, 42, 38, 29, 17, 4,
+        62, 55, 59, 36, 53, 51, 43, 22, 45, 39, 33, 30, 24, 18, 12, 5,
+        63, 47, 56, 27, 60, 41, 37, 16, 54, 35, 52, 21, 44, 32, 23, 11,
+        46, 26, 40, 15, 34, 20, 31, 10, 25, 14, 19, 9,  13, 8,  7,  6};
+    return at[((x & (~x + 1U)) * 0x03F79D71B4CB0A89ULL) >> 58];
+}
+
+/* Index of the highest set bit of x (x != 0). */
+static int highest_bit(uint64_t x)
+{
+    x |= x >> 1;
+    x |= x >> 2;
+    x |= x >> 4;
+    x |= x >> 8;
+    x |= x >> 16;
+    x |= x >> 32;
+    return lowest_bit(x ^ (x >> 1));
+}
+
 /* The nodes of the ranges not marked yet: their hull [*a, *b]; returns
- * whether there are any. Most ranges are marked whole already, which
- * any_bit tells first. */
+ * whether there are any. A word at a time. */
 static int open_nodes(const uint64_t *row, int ranges[3][2], int n, int *a,
                       int *b)
 {
-    int i, ie, any = 0;
-    for (i = 0; i < n && !any; i++)
-        any = any_bit(row, ranges[i][0], ranges[i][1] + 1L, ~0ULL);
-    if (!any)
-        return 0;
-    *a = QRT_MAX_NE;
-    *b = -1;
+    uint64_t open[QRT_ROW_WORDS];
+    int i, w;
+    for (w = 0; w < QRT_ROW_WORDS; w++)
+        open[w] = 0;
     for (i = 0; i < n; i++)
-        for (ie = ranges[i][0]; ie <= ranges[i][1]; ie++)
-            if (!bit_set(row, ie)) {
-                *a = ie < *a ? ie : *a;
-                *b = ie > *b ? ie : *b;
-            }
-    return *b >= 0;
+        set_row_range(open, ranges[i][0], ranges[i][1]);
+    for (w = 0; w < QRT_ROW_WORDS && !(open[w] & ~row[w]); w++)
+        ;
+    if (w == QRT_ROW_WORDS)
+        return 0;
+    *a = (w << 6) + lowest_bit(open[w] & ~row[w]);
+    for (w = QRT_ROW_WORDS - 1; !(open[w] & ~row[w]); w--)
+        ;
+    *b = (w << 6) + highest_bit(open[w] & ~row[w]);
+    return 1;
 }
 
 /* Links 2 and 3 of one point for the cell boxes of alpha node ia. */
 static void raster_plane(const struct qrt_raster *r, int ia, double rho,
                          const double p[3])
 {
-    unsigned char full[QRT_MAX_NS] = {0};
+    uint64_t full[QRT_SIGMA_WORDS] = {0};
     struct plane pl;
     int rows[3][2], nrows, k, is;
     if (!plane_at(r, ia, p, rho, 0.0, &pl))
@@ -530,9 +564,9 @@ static void raster_plane(const struct qrt_raster *r, int ia, double rho,
     for (k = 0; k < nrows; k++)
         for (is = rows[k][0]; is <= rows[k][1]; is++) {
             int ranges[3][2], n;
-            if (full[is] || !wanted(r, ia, is))
+            if (bit_set(full, is) || !wanted(r, ia, is))
                 continue;
-            n = link3_row_ranges(r, is, &pl, ranges);
+            n = link3_row_ranges(r, is, &pl.dc, ranges);
             mark_ranges(r->mask->rows[ia][is], ranges, n);
         }
 }
@@ -579,21 +613,6 @@ void qrt_raster_point(const struct qrt_raster *r, const double p[3])
     double phi = atan2(p[1], p[0]);
     raster_link1(r, rho, p);
     raster_planes(r, p, rho, phi);
-}
-
-/* Every member's plane at alpha node ia (hit2 = hit3 = 0 where none). */
-static void member_planes(const struct qrt_raster *r, int ia,
-                          const float (*pts)[3], const int32_t *members,
-                          const double *mrho, int m, struct plane *mpl)
-{
-    int j, k;
-    for (j = 0; j < m; j++) {
-        double p[3];
-        for (k = 0; k < 3; k++)
-            p[k] = pts[members[j]][k];
-        if (!plane_at(r, ia, p, mrho[j], 0.0, &mpl[j]))
-            mpl[j].hit2 = mpl[j].hit3 = 0;
-    }
 }
 
 static void set_alpha_bits(const struct qrt_raster *r, double rho, double phi,
@@ -650,6 +669,111 @@ void qrt_raster_cluster_prepare(const struct qrt_raster *r,
                    max_plane_radius(r) + g->ball, g);
 }
 
+int qrt_raster_view_make(const struct qrt_raster *r, const float (*pts)[3],
+                         const int32_t *members, const double *mrho,
+                         const struct qrt_cluster_geom *g, int ia,
+                         struct qrt_alpha_view *v)
+{
+    struct plane cpl;
+    uint64_t full[QRT_SIGMA_WORDS];
+    int rows[3][2], nrows, i, w, m = g->m;
+    for (w = 0; w < QRT_SIGMA_WORDS; w++)
+        v->rows[w] = full[w] = 0;
+    if (!plane_at(r, ia, g->c, g->rho, m == 1 ? 0.0 : g->ball, &cpl))
+        return 0; /* no member can touch links 2 or 3 here */
+    if (m == 1) {
+        raster_link2(r, ia, &cpl, full);
+    } else {
+        /* link 2: the members only where the ball's rows are not all
+         * full; their rows are blocked whole, whichever row is built */
+        nrows = link2_rows(r, &cpl, rows);
+        for (i = 0; nrows > 0 && i < m; i++) {
+            struct plane mp;
+            double p[3];
+            int k;
+            if (i == 0 && rows_full(r, ia, rows, nrows))
+                break;
+            for (k = 0; k < 3; k++)
+                p[k] = pts[members[i]][k];
+            if (plane_at(r, ia, p, mrho[i], 0.0, &mp))
+                raster_link2(r, ia, &mp, full);
+        }
+    }
+    v->disc = cpl.dc;
+    nrows = link3_rows(r, &cpl, rows);
+    for (i = 0; i < nrows; i++)
+        set_row_range(v->rows, rows[i][0], rows[i][1]);
+    for (w = 0; w < QRT_SIGMA_WORDS; w++)
+        v->rows[w] &= ~full[w];
+    return 1;
+}
+
+void qrt_raster_member_discs(const struct qrt_raster *r, const float (*pts)[3],
+                             const int32_t *members, const double *mrho, int m,
+                             int ia, struct qrt_disc *md)
+{
+    int j, k;
+    for (j = 0; j < m; j++) {
+        struct plane pl;
+        double p[3];
+        for (k = 0; k < 3; k++)
+            p[k] = pts[members[j]][k];
+        md[j].reach3 = -1.0;
+        if (plane_at(r, ia, p, mrho[j], 0.0, &pl))
+            md[j] = pl.dc;
+    }
+}
+
+static inline int view_row(const struct qrt_raster *r,
+                           const struct qrt_alpha_view *v, int m, int ia,
+                           int is, int *a, int *b)
+{
+    uint64_t *row = r->mask->rows[ia][is];
+    int ranges[3][2], n;
+    if (!bit_set(v->rows, is))
+        return 0;
+    n = link3_row_ranges(r, is, &v->disc, ranges);
+    if (m == 1) { /* the point itself, as qrt_raster_point takes it */
+        mark_ranges(row, ranges, n);
+        return 0;
+    }
+    return n > 0 && open_nodes(row, ranges, n, a, b);
+}
+
+static inline void view_members(const struct qrt_raster *r, int ia, int is,
+                                int a, int b, const struct qrt_disc *md, int m)
+{
+    uint64_t *row = r->mask->rows[ia][is];
+    int j;
+    if (r->sector_ok && b - a < SECTOR_SPAN_MAX) {
+        /* a few nodes at the edge of what is blocked: no member can truly
+         * block one outside the ball's range, so only these are asked of
+         * each member */
+        mark_edge_nodes(r, is, a, b, md, m, row);
+        return;
+    }
+    for (j = 0; j < m; j++) {
+        int ranges[3][2], n;
+        if (md[j].reach3 < 0.0)
+            continue;
+        n = link3_row_ranges(r, is, &md[j], ranges);
+        mark_ranges(row, ranges, n);
+    }
+}
+
+int qrt_raster_view_row(const struct qrt_raster *r,
+                        const struct qrt_alpha_view *v, int m, int ia, int is,
+                        int *a, int *b)
+{
+    return view_row(r, v, m, ia, is, a, b);
+}
+
+void qrt_raster_view_members(const struct qrt_raster *r, int ia, int is, int a,
+                             int b, const struct qrt_disc *md, int m)
+{
+    view_members(r, ia, is, a, b, md, m);
+}
+
 /* A cluster of nearby points shares the link-3 work. Its bounding ball
  * (centre c, radius ball) touches the arm wherever any member does, so its
  * raster contains every cell a member truly blocks. On each sigma row the
@@ -662,64 +786,26 @@ void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
                            const int32_t *members, const double *mrho,
                            const struct qrt_cluster_geom *g, int ia)
 {
-    struct plane mpl[QRT_CLUSTER_MAX], cpl;
-    unsigned char full[QRT_MAX_NS];
-    int rows[3][2], nrows, is, j, k, m = g->m, planes_ready = 0;
+    struct qrt_alpha_view v;
+    struct qrt_disc md[QRT_CLUSTER_MAX];
+    int is, a, b, discs_ready = 0, w;
     if (!owns(r, ia) || !((g->alpha[ia >> 6] >> (ia & 63)) & 1U))
         return;
-    if (m == 1) {
-        raster_plane(r, ia, g->rho, g->c);
+    if (!qrt_raster_view_make(r, pts, members, mrho, g, ia, &v))
         return;
-    }
-    if (!plane_at(r, ia, g->c, g->rho, g->ball, &cpl))
-        return; /* no member can touch links 2 or 3 here */
-    for (is = 0; is < r->mask->lat.n[1]; is++)
-        full[is] = 0;
-    /* link 2: members only where the ball's rows are not all full */
-    nrows = link2_rows(r, &cpl, rows);
-    if (nrows > 0 && !rows_full(r, ia, rows, nrows)) {
-        member_planes(r, ia, pts, members, mrho, m, mpl);
-        planes_ready = 1;
-        for (j = 0; j < m; j++)
-            raster_link2(r, ia, &mpl[j], full);
-    }
-    nrows = link3_rows(r, &cpl, rows);
-    for (k = 0; k < nrows; k++) {
-        int first = rows[k][0], last = rows[k][1];
-        if (r->only_alpha >= 0) { /* a block of rows: only those */
-            first = first > r->only_s0 ? first : r->only_s0;
-            last = last < r->only_s1 - 1 ? last : r->only_s1 - 1;
+    for (w = 0; w < QRT_SIGMA_WORDS && !v.rows[w]; w++)
+        ;
+    if (w == QRT_SIGMA_WORDS)
+        return;
+    for (is = (w << 6) + lowest_bit(v.rows[w]); is < r->mask->lat.n[1]; is++) {
+        if (!bit_set(v.rows, is) || !wanted(r, ia, is) ||
+            !view_row(r, &v, g->m, ia, is, &a, &b))
+            continue;
+        if (!discs_ready) {
+            qrt_raster_member_discs(r, pts, members, mrho, g->m, ia, md);
+            discs_ready = 1;
         }
-        for (is = first; is <= last; is++) {
-            uint64_t *row = r->mask->rows[ia][is];
-            int cr[3][2], nc, a, b;
-            /* (a block of rows is clipped above) */
-            if (full[is] || (r->only_rows && !wanted(r, ia, is)))
-                continue;
-            nc = link3_row_ranges(r, is, &cpl, cr);
-            if (nc == 0)
-                continue;
-            if (!open_nodes(row, cr, nc, &a, &b))
-                continue;
-            if (!planes_ready) {
-                member_planes(r, ia, pts, members, mrho, m, mpl);
-                planes_ready = 1;
-            }
-            if (r->sector_ok && b - a < SECTOR_SPAN_MAX) {
-                /* a few nodes at the edge of what is blocked: no member
-                 * can truly block one outside the ball's range, so only
-                 * these are asked of each member */
-                mark_edge_nodes(r, is, a, b, mpl, m, row);
-                continue;
-            }
-            for (j = 0; j < m; j++) {
-                int mr[3][2], nm;
-                if (!mpl[j].hit3)
-                    continue;
-                nm = link3_row_ranges(r, is, &mpl[j], mr);
-                mark_ranges(row, mr, nm);
-            }
-        }
+        view_members(r, ia, is, a, b, md, g->m);
     }
 }
 

@@ -98,4 +98,27 @@ void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
                            const int32_t *members, const double *mrho,
                            const struct qrt_cluster_geom *g, int ia);
 
+/* qrt_raster_cluster_at in steps, for rows built one at a time from views
+ * kept between them (the same bits as qrt_raster_cluster_at on the same
+ * rows in the same order):
+ * - _view_make: the cluster at alpha node ia (the caller owns ia); rasters
+ *   link 2, whose rows are blocked whole, for every row at once. Returns 0
+ *   where no member can touch links 2 or 3.
+ * - _view_row: link 3 on row is; returns 1 when the members must be asked
+ *   about the row's open nodes a .. b of the ball's range.
+ * - _member_discs: the m members' discs at ia (m <= QRT_CLUSTER_MAX).
+ * - _view_members: asks them. */
+int qrt_raster_view_make(const struct qrt_raster *r, const float (*pts)[3],
+                         const int32_t *members, const double *mrho,
+                         const struct qrt_cluster_geom *g, int ia,
+                         struct qrt_alpha_view *v);
+int qrt_raster_view_row(const struct qrt_raster *r,
+                        const struct qrt_alpha_view *v, int m, int ia, int is,
+                        int *a, int *b);
+void qrt_raster_member_discs(const struct qrt_raster *r, const float (*pts)[3],
+                             const int32_t *members, const double *mrho, int m,
+                             int ia, struct qrt_disc *md);
+void qrt_raster_view_members(const struct qrt_raster *r, int ia, int is, int a,
+                             int b, const struct qrt_disc *md, int m);
+
 #endif

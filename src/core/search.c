@@ -242,6 +242,13 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
             pl->open.heap[0] = pl->open.heap[size];
             sift_down(pl, 0, size);
         }
+        qrt_lattice_coords(lat, u, ijk);
+        /* a node pushed before its row was built is asked now, so that
+         * rows are built for the nodes the search takes, not for every
+         * neighbour it looks at */
+        qrt_lazy_need(pl, ijk[0], ijk[1]);
+        if (qrt_mask_bit(&pl->mask, ijk))
+            continue;
         res->expanded++;
         slot = goal_slot(goals, u);
         if (slot >= 0 &&
@@ -251,7 +258,6 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
             res->goal_node = u;
             res->cost = best;
         }
-        qrt_lattice_coords(lat, u, ijk);
         /* off every face of the lattice, no neighbour leaves it or wraps:
          * its index is an offset from u */
         inside = ijk[0] > 0 && ijk[0] < lat->n[0] - 1 && ijk[1] > 0 &&
@@ -270,8 +276,8 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
             }
             if (pl->heap_pos[v] == -2)
                 continue;
-            qrt_lazy_need(pl, nb[0], nb[1]);
-            if (qrt_mask_bit(&pl->mask, nb))
+            /* a node whose row is not built yet is checked when taken */
+            if (qrt_lazy_ready(pl, nb[0], nb[1]) && qrt_mask_bit(&pl->mask, nb))
                 continue;
             g = pl->search.dist[u] + dir_cost[d];
             if (pl->heap_pos[v] >= 0 && pl->search.dist[v] <= g)

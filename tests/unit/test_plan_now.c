@@ -273,6 +273,22 @@ static void fraction_built(void)
     total = (long)pl.mask.lat.n[0] * pl.mask.lat.n[1];
     CHECK(built > 0 && built * 2 < total, "spheres: %ld of %ld rows built",
           built, total);
+#ifdef QRT_LAZY_VIEW_BYTES
+    /* a build with less room for views: the ways out were taken */
+    CHECK(QRT_LAZY_VIEW_BYTES > 1000
+              ? pl.lazy_forgets > 0
+              : pl.lazy_unviewed_rows > 0 && pl.lazy_unkept_discs > 0,
+          "spheres in %d bytes: %ld forgets, %ld rows without views, %ld "
+          "discs not kept",
+          QRT_LAZY_VIEW_BYTES, pl.lazy_forgets, pl.lazy_unviewed_rows,
+          pl.lazy_unkept_discs);
+#else
+    /* the table holds every view and disc this plan makes */
+    CHECK(pl.lazy_forgets == 0 && pl.lazy_unviewed_rows == 0 &&
+              pl.lazy_unkept_discs == 0,
+          "spheres: %ld forgets, %ld rows without views, %ld discs not kept",
+          pl.lazy_forgets, pl.lazy_unviewed_rows, pl.lazy_unkept_discs);
+#endif
 }
 
 /* The search's way out when its heap needs the clusters' room. */
