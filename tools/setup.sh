@@ -37,7 +37,7 @@ py=/usr/bin/python3
 [ -x "$py" ] || py=$(command -v python3)
 stamp=.venv/.requirements.stamp
 if [ ! -x .venv/bin/python ] || ! cmp -s tools/requirements.txt "$stamp"; then
-    echo "setup: creating .venv with $(tr '\n' ' ' < tools/requirements.txt)"
+    echo "setup: creating .venv with $(grep -v '^#' tools/requirements.txt | tr '\n' ' ')"
     [ -x .venv/bin/python ] || "$py" -m venv .venv
     .venv/bin/python -m pip install -q --upgrade pip >/dev/null
     .venv/bin/python -m pip install -q -r tools/requirements.txt

@@ -184,7 +184,7 @@ static const struct qrt_disc *member_discs(struct qrt_planner *pl, int ia,
 
 /* Row (ia, is) from every kept cluster that may block alpha node ia, in
  * order, through their kept views. */
-static void build_row(struct qrt_planner *pl, int ia, int is)
+void qrt_lazy_build(struct qrt_planner *pl, int ia, int is)
 {
     struct qrt_lazy_clusters *c = &pl->open.lazy.clusters;
     struct qrt_disc scratch[QRT_CLUSTER_MAX];
@@ -213,11 +213,6 @@ static void build_row(struct qrt_planner *pl, int ia, int is)
     mark_ready(pl, ia, is);
 }
 
-void qrt_lazy_build(struct qrt_planner *pl, int ia, int is)
-{
-    build_row(pl, ia, is);
-}
-
 void qrt_lazy_build_rows(struct qrt_planner *pl, const uint64_t *rows)
 {
     int ia, is;
@@ -226,7 +221,7 @@ void qrt_lazy_build_rows(struct qrt_planner *pl, const uint64_t *rows)
             long bit = (long)ia * QRT_MAX_NS + is;
             if ((!rows || ((rows[bit >> 6] >> (bit & 63)) & 1U)) &&
                 !qrt_lazy_ready(pl, ia, is))
-                build_row(pl, ia, is);
+                qrt_lazy_build(pl, ia, is);
         }
 }
 

@@ -669,6 +669,18 @@ void qrt_raster_cluster_prepare(const struct qrt_raster *r,
                    max_plane_radius(r) + g->ball, g);
 }
 
+/* Member j's plane at alpha node ia; returns plane_at's answer. */
+static int member_plane(const struct qrt_raster *r, int ia,
+                        const float (*pts)[3], const int32_t *members,
+                        const double *mrho, int j, struct plane *pl)
+{
+    double p[3];
+    int k;
+    for (k = 0; k < 3; k++)
+        p[k] = pts[members[j]][k];
+    return plane_at(r, ia, p, mrho[j], 0.0, pl);
+}
+
 int qrt_raster_view_make(const struct qrt_raster *r, const float (*pts)[3],
                          const int32_t *members, const double *mrho,
                          const struct qrt_cluster_geom *g, int ia,
@@ -687,17 +699,12 @@ int qrt_raster_view_make(const struct qrt_raster *r, const float (*pts)[3],
         /* link 2: the members only where the ball's rows are not all
          * full; their rows are blocked whole, whichever row is built */
         nrows = link2_rows(r, &cpl, rows);
-        for (i = 0; nrows > 0 && i < m; i++) {
-            struct plane mp;
-            double p[3];
-            int k;
-            if (i == 0 && rows_full(r, ia, rows, nrows))
-                break;
-            for (k = 0; k < 3; k++)
-                p[k] = pts[members[i]][k];
-            if (plane_at(r, ia, p, mrho[i], 0.0, &mp))
-                raster_link2(r, ia, &mp, full);
-        }
+        if (nrows > 0 && !rows_full(r, ia, rows, nrows))
+            for (i = 0; i < m; i++) {
+                struct plane mp;
+                if (member_plane(r, ia, pts, members, mrho, i, &mp))
+                    raster_link2(r, ia, &mp, full);
+            }
     }
     v->disc = cpl.dc;
     nrows = link3_rows(r, &cpl, rows);
@@ -712,14 +719,11 @@ void qrt_raster_member_discs(const struct qrt_raster *r, const float (*pts)[3],
                              const int32_t *members, const double *mrho, int m,
                              int ia, struct qrt_disc *md)
 {
-    int j, k;
+    int j;
     for (j = 0; j < m; j++) {
         struct plane pl;
-        double p[3];
-        for (k = 0; k < 3; k++)
-            p[k] = pts[members[j]][k];
-        md[j].reach3 = -1.0;
-        if (plane_at(r, ia, p, mrho[j], 0.0, &pl))
+        md[j].reach3 = -1.0f;
+        if (member_plane(r, ia, pts, members, mrho, j, &pl))
             md[j] = pl.dc;
     }
 }
@@ -788,24 +792,23 @@ void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
 {
     struct qrt_alpha_view v;
     struct qrt_disc md[QRT_CLUSTER_MAX];
-    int is, a, b, discs_ready = 0, w;
+    int a, b, discs_ready = 0, w;
     if (!owns(r, ia) || !((g->alpha[ia >> 6] >> (ia & 63)) & 1U))
         return;
     if (!qrt_raster_view_make(r, pts, members, mrho, g, ia, &v))
         return;
-    for (w = 0; w < QRT_SIGMA_WORDS && !v.rows[w]; w++)
-        ;
-    if (w == QRT_SIGMA_WORDS)
-        return;
-    for (is = (w << 6) + lowest_bit(v.rows[w]); is < r->mask->lat.n[1]; is++) {
-        if (!bit_set(v.rows, is) || !wanted(r, ia, is) ||
-            !view_row(r, &v, g->m, ia, is, &a, &b))
-            continue;
-        if (!discs_ready) {
-            qrt_raster_member_discs(r, pts, members, mrho, g->m, ia, md);
-            discs_ready = 1;
+    for (w = 0; w < QRT_SIGMA_WORDS; w++) {
+        uint64_t rows = v.rows[w]; /* the rows link 3 may reach, in order */
+        for (; rows; rows &= rows - 1U) {
+            int is = (w << 6) + lowest_bit(rows);
+            if (!wanted(r, ia, is) || !view_row(r, &v, g->m, ia, is, &a, &b))
+                continue;
+            if (!discs_ready) {
+                qrt_raster_member_discs(r, pts, members, mrho, g->m, ia, md);
+                discs_ready = 1;
+            }
+            view_members(r, ia, is, a, b, md, g->m);
         }
-        view_members(r, ia, is, a, b, md, g->m);
     }
 }
 
