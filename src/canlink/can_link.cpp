@@ -22,6 +22,8 @@ namespace
 constexpr uint64_t kReopenUs = 500000;   // retry a failed socket
 constexpr uint64_t kNoBufferUs = 100000; // ENOBUFS this long is a bus fault
 constexpr size_t kMaxPending = 256;
+// on shutdown, how long the last quick stops may wait for room to be written
+constexpr uint64_t kShutdownFlushUs = 200000;
 } // namespace
 
 uint64_t CanLink::now_us()
@@ -48,6 +50,16 @@ CanLink::~CanLink()
         }
         stop_ = true;
         thread_.join();
+        // the thread no longer retries what the transmit queue refused
+        // (EAGAIN, ENOBUFS): the quick stops must still reach the bus, so
+        // wait for room a bounded time (a process that exits at once, as
+        // qrtplan-exec does on a drive fault, lost the last stops)
+        uint64_t until = now_us() + kShutdownFlushUs;
+        while (!pending_.empty() && fd_ >= 0 && now_us() < until) {
+            pollfd p{fd_, POLLOUT, 0};
+            poll(&p, 1, 2);
+            flush(now_us());
+        }
     }
     close_socket();
 }
