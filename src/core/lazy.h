@@ -34,8 +34,7 @@ static inline int qrt_lazy_ready(const struct qrt_planner *pl, int ia, int is)
 /* Row (ia, is) built, if rows are being built as they are read. */
 static inline void qrt_lazy_need(struct qrt_planner *pl, int ia, int is)
 {
-    long bit = (long)ia * QRT_MAX_NS + is;
-    if (pl->lazy && !((pl->rows_ready[bit >> 6] >> (bit & 63)) & 1U))
+    if (!qrt_lazy_ready(pl, ia, is))
         qrt_lazy_build(pl, ia, is);
 }
 
