@@ -110,6 +110,7 @@ struct qrtcan_master_status {
     int path_done; /* the last path reached its goal */
     unsigned long frames_in, frames_ignored, frames_malformed;
     unsigned long frames_out, frames_dropped; /* outbox overflow */
+    unsigned long frames_withdrawn; /* drive commands a stop made stale */
     unsigned long recoveries;
 };
 
@@ -136,7 +137,7 @@ struct qrtcan_master {
     struct qrtcan_frame out[QRTCAN_MASTER_OUTBOX];
     int out_head, out_count;
     unsigned long frames_in, frames_ignored, frames_malformed;
-    unsigned long frames_out, frames_dropped, recoveries;
+    unsigned long frames_out, frames_dropped, frames_withdrawn, recoveries;
 };
 
 /* QRTCAN_E_ARG for invalid node ids (0, > 127, repeated), bad scales,

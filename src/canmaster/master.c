@@ -146,10 +146,44 @@ static void enter(struct qrtcan_master *m, enum qrtcan_master_state s,
     m->state_since_us = now_us;
 }
 
+/* Is f a command to one of our drives that a stop makes stale: an RPDO1
+ * (controlword and target) or an SDO request? */
+static int commands_drive(const struct qrtcan_master *m,
+                          const struct qrtcan_frame *f)
+{
+    int j;
+    for (j = 0; j < QRTCAN_JOINTS; j++)
+        if (f->id == QRTCAN_FN_RPDO1 + m->drive[j].node ||
+            f->id == QRTCAN_FN_RSDO + m->drive[j].node)
+            return 1;
+    return 0;
+}
+
+/* Take the stale drive commands out of the outbox, keeping the order of the
+ * rest (SYNC, heartbeat, NMT). A set-point RPDO sent after a quick stop
+ * carries "enable operation" and would take the drive straight back out of
+ * Quick Stop Active (CiA 402 transition 16) and on toward its old target. */
+static void withdraw_drive_commands(struct qrtcan_master *m)
+{
+    int i, kept = 0;
+    for (i = 0; i < m->out_count; i++) {
+        const struct qrtcan_frame *f =
+            &m->out[(m->out_head + i) % QRTCAN_MASTER_OUTBOX];
+        if (commands_drive(m, f)) {
+            m->frames_withdrawn++;
+            continue;
+        }
+        m->out[(m->out_head + kept) % QRTCAN_MASTER_OUTBOX] = *f;
+        kept++;
+    }
+    m->out_count = kept;
+}
+
 /* Quick stop to every drive, first in the outbox, and hold there. */
 static void stop_all(struct qrtcan_master *m)
 {
     int j;
+    withdraw_drive_commands(m);
     for (j = QRTCAN_JOINTS - 1; j >= 0; j--) {
         m->drive[j].controlword = QRTCAN_CW_CMD_QUICK_STOP;
         send_rpdo(m, j, 1);
@@ -781,6 +815,7 @@ void qrtcan_master_get_status(const struct qrtcan_master *m,
     st->frames_malformed = m->frames_malformed;
     st->frames_out = m->frames_out;
     st->frames_dropped = m->frames_dropped;
+    st->frames_withdrawn = m->frames_withdrawn;
     st->recoveries = m->recoveries;
 }
 

@@ -77,6 +77,47 @@ static void step(void)
     bus_count = 0;
 }
 
+/* One SYNC period on the master's side only, so that the outbox holds the
+ * SYNC and the drives' set-point RPDOs when the caller stops. */
+static void queue_sync_rpdos(void)
+{
+    clock_us += m.cfg.sync_period_us;
+    qrtcan_master_tick(&m, clock_us);
+    CHECK(m.out_count >= 4, "only %d frames queued at a SYNC", m.out_count);
+}
+
+/* Deliver the outbox after a stop; after its quick stop, no drive may be sent
+ * another controlword (an "enable operation" would undo the stop). Returns
+ * how many queued drive commands the stop withdrew. */
+static unsigned long deliver_after_stop(const char *what,
+                                        unsigned long withdrawn_before)
+{
+    struct qrtcan_frame out[QRTCAN_MASTER_OUTBOX];
+    int stopped[3] = {0, 0, 0};
+    int n, i, j;
+    n = qrtcan_master_take_frames(&m, out, QRTCAN_MASTER_OUTBOX);
+    for (i = 0; i < n; i++) {
+        for (j = 0; j < 3; j++) {
+            uint16_t cw;
+            if (out[i].id != 0x200u + m.drive[j].node || out[i].dlc < 2)
+                continue;
+            cw = (uint16_t)(out[i].data[0] | (out[i].data[1] << 8));
+            if (cw == QRTCAN_CW_CMD_QUICK_STOP)
+                stopped[j] = 1;
+            else
+                CHECK(!stopped[j],
+                      "%s: controlword 0x%04x to drive %d after its quick "
+                      "stop",
+                      what, cw, j + 1);
+        }
+        for (j = 0; j < 3; j++)
+            drive_on_frame(&drives[j], &out[i], &can);
+    }
+    for (j = 0; j < 3; j++)
+        CHECK(stopped[j], "%s: no quick stop to drive %d", what, j + 1);
+    return m.frames_withdrawn - withdrawn_before;
+}
+
 static enum qrtcan_master_state state(void)
 {
     struct qrtcan_master_status st;
@@ -264,7 +305,13 @@ int main(void)
             step(); /* 1 s in */
         CHECK(state() == QRTCAN_MASTER_MOVING, "not moving: %s",
               qrtcan_master_state_name(state()));
-        qrtcan_master_quick_stop(&m, clock_us);
+        {
+            unsigned long before_stop = m.frames_withdrawn;
+            queue_sync_rpdos();
+            qrtcan_master_quick_stop(&m, clock_us);
+            CHECK(deliver_after_stop("quick stop", before_stop) >= 3,
+                  "the queued set-points were not withdrawn");
+        }
         CHECK(qrtcan_master_set_path(&m, long_move, 2, clock_us) ==
                   QRTCAN_E_CMD,
               "a path while the stop ramps down must be refused");
@@ -431,7 +478,13 @@ int main(void)
               "move before shutdown");
         for (i = 0; i < 2000; i++)
             step();
-        qrtcan_master_shutdown(&m, clock_us);
+        {
+            unsigned long before_stop = m.frames_withdrawn;
+            queue_sync_rpdos();
+            qrtcan_master_shutdown(&m, clock_us);
+            CHECK(deliver_after_stop("shutdown", before_stop) >= 3,
+                  "the queued set-points were not withdrawn");
+        }
         for (i = 0; i < 8000; i++)
             step();
         for (j = 0; j < 3; j++) {
