@@ -44,7 +44,7 @@ CanLink::~CanLink()
         {
             std::lock_guard<std::mutex> lock(mu_);
             uint64_t now = now_us();
-            pending_.clear();
+            discard_pending(pending_.size());
             qrtcan_master_shutdown(&master_, now);
             flush(now);
         }
@@ -128,8 +128,14 @@ void CanLink::bus_error(uint64_t now, const std::string &why)
 {
     bus_errors_++;
     link_ = why;
-    pending_.clear(); // stale; the master queues a quick stop instead
+    discard_pending(pending_.size()); // stale; the master queues a quick stop
     qrtcan_master_bus_error(&master_, now);
+}
+
+void CanLink::discard_pending(size_t n)
+{
+    frames_unsent_ += n;
+    pending_.erase(pending_.begin(), pending_.begin() + long(n));
 }
 
 void CanLink::flush(uint64_t now)
@@ -138,8 +144,7 @@ void CanLink::flush(uint64_t now)
     int n = qrtcan_master_take_frames(&master_, taken, QRTCAN_MASTER_OUTBOX);
     pending_.insert(pending_.end(), taken, taken + n);
     if (pending_.size() > kMaxPending) // the bus has been refusing for long
-        pending_.erase(pending_.begin(),
-                       pending_.begin() + long(pending_.size() - kMaxPending));
+        discard_pending(pending_.size() - kMaxPending);
     if (fd_ < 0)
         return;
     size_t written = 0;
@@ -152,6 +157,7 @@ void CanLink::flush(uint64_t now)
         ssize_t rc = ::write(fd_, &f, sizeof f);
         if (rc == ssize_t(sizeof f)) {
             written++;
+            frames_written_++;
             nobuf_since_ = 0;
             if (q.id >= 0x200 && q.id < 0x280 && q.dlc >= 2 &&
                 (q.data[0] | (q.data[1] << 8)) == QRTCAN_CW_CMD_QUICK_STOP)
@@ -257,7 +263,7 @@ void CanLink::quick_stop()
 {
     std::lock_guard<std::mutex> lock(mu_);
     uint64_t now = now_us();
-    pending_.clear(); // set-points not yet written must not follow the stop
+    discard_pending(pending_.size()); // set-points must not follow the stop
     qrtcan_master_quick_stop(&master_, now);
     flush(now);
 }
@@ -270,6 +276,8 @@ CanLinkStatus CanLink::status() const
     s.link = link_;
     s.bus_errors = bus_errors_;
     s.write_retries = write_retries_;
+    s.frames_written = frames_written_;
+    s.frames_unsent = frames_unsent_;
     s.last_quick_stop_us = last_quick_stop_us_;
     return s;
 }

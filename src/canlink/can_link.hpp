@@ -30,6 +30,10 @@ struct CanLinkStatus {
     std::string link; // "up", or why not ("down: Network is down", ...)
     unsigned long bus_errors = 0;
     unsigned long write_retries = 0; // ENOBUFS and the like
+    unsigned long frames_written = 0;
+    // taken from the master and never written: stale at a stop or a bus
+    // error, or beyond the queue's room while the bus refused them
+    unsigned long frames_unsent = 0;
     uint64_t last_quick_stop_us = 0; // CLOCK_MONOTONIC when written
 };
 
@@ -63,6 +67,7 @@ class CanLink
     void close_socket();
     void flush(uint64_t now); // call with mu_ held
     void bus_error(uint64_t now, const std::string &why);
+    void discard_pending(size_t n); // the oldest n, counted
 
     std::string iface_;
     qrtcan_master_config cfg_;
@@ -72,6 +77,7 @@ class CanLink
     std::string link_ = "not started";
     uint64_t next_open_us_ = 0;
     unsigned long bus_errors_ = 0, write_retries_ = 0;
+    unsigned long frames_written_ = 0, frames_unsent_ = 0;
     uint64_t last_quick_stop_us_ = 0;
     uint64_t nobuf_since_ = 0;          // first ENOBUFS of the present run
     std::vector<qrtcan_frame> pending_; // taken from the master, not written

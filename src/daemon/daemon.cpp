@@ -639,6 +639,13 @@ void Daemon::clock_loop(const std::atomic<bool> &stop)
                 if (cs.master.reason != QRTCAN_REASON_NONE)
                     can_state += std::string(", ") +
                                  qrtcan_master_reason_name(cs.master.reason);
+                s.can_frames_received = int64_t(cs.master.frames_in);
+                s.can_frames_malformed = int64_t(cs.master.frames_malformed);
+                s.can_frames_sent = int64_t(cs.frames_written);
+                s.can_frames_dropped = int64_t(cs.master.frames_dropped);
+                s.can_frames_unsent = int64_t(cs.frames_unsent);
+                s.can_frames_withdrawn = int64_t(cs.master.frames_withdrawn);
+                s.can_bus_errors = int64_t(cs.bus_errors);
             }
             {
                 std::lock_guard<std::mutex> lock(mu_);

@@ -13,7 +13,9 @@ plans from the joints the drives report, and moves the arm:
      the time from that scan's publication to the first quick-stop frame on
      the bus (candump's timestamp) is the stop latency. A clear scan then
      lets it move on (the next plan executes);
-  3. every captured frame decodes with the DBC.
+  3. at the goal, two malformed TPDOs: the arm holds, and the daemon's
+     status counts them (and no frame dropped, no bus error);
+  4. every captured frame but those two decodes with the DBC.
 """
 import argparse
 import os
@@ -37,6 +39,8 @@ import lcm  # noqa: E402
 import oracle  # noqa: E402
 
 failures = []
+# TPDO1 of nodes 1 and 2 with too few bytes (candump's spelling)
+MALFORMED = ("181#00", "182#0102")
 
 
 def check(cond, what):
@@ -95,6 +99,9 @@ def main():
     lc.subscribe("QRT_JOINT_STATE", lambda c, d: joints.append(
         cf.joint_state_t.decode(d)))
     lc.subscribe("QRT_PLAN", lambda c, d: plans.append(cf.plan_t.decode(d)))
+    statuses = []
+    lc.subscribe("QRT_STATUS", lambda c, d: statuses.append(
+        cf.daemon_status_t.decode(d)))
 
     def pump(seconds, until=None):
         end = time.time() + seconds
@@ -171,6 +178,27 @@ def main():
                     reached = True
                     break
         check(reached, f"the arm reached the goal: {list(joints[-1].joints_deg) if joints else None}")
+        # the frame counters in the daemon's status (1 Hz): a healthy run
+        # loses nothing and reads nothing malformed from servo_sim, but the
+        # two short TPDOs sent now are counted, and the arm holds
+        for frame in MALFORMED:
+            subprocess.run(["cansend", "vcan0", frame], check=True)
+        seen = len(statuses)
+        pump(3, lambda: len(statuses) > seen)
+        st = statuses[-1] if len(statuses) > seen else None
+        check(joints and not joints[-1].moving and
+              abs(oracle.wrap180(joints[-1].joints_deg[0] - goal[0])) < 0.05,
+              "the arm holds at the goal after the malformed frames")
+        check(st is not None and st.can_frames_sent > 0 and
+              st.can_frames_received > 0 and
+              st.can_frames_malformed == len(MALFORMED) and
+              st.can_frames_dropped == 0 and st.can_bus_errors == 0,
+              "status counts the CAN frames: " + (
+                  f"sent {st.can_frames_sent}, received {st.can_frames_received}, "
+                  f"malformed {st.can_frames_malformed}, dropped "
+                  f"{st.can_frames_dropped}, unsent {st.can_frames_unsent}, "
+                  f"withdrawn {st.can_frames_withdrawn}, bus errors "
+                  f"{st.can_bus_errors}" if st else "no status"))
     finally:
         daemon.terminate()
         try:
@@ -213,6 +241,8 @@ def main():
         for line in f:
             parts = line.split()
             if len(parts) >= 3 and "#" in parts[2]:
+                if parts[2] in MALFORMED:
+                    continue  # sent to be refused
                 ident, data = parts[2].split("#", 1)
                 total += 1
                 try:
