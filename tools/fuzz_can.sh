@@ -14,6 +14,17 @@ printf '\x00\x80\x00\x00\x00\x00\x00\x00\x00\x00\x00' >"$out/corpus_can/sync"
 printf '\x06\x01\x08\x40\x41\x60\x00\x00\x00\x00\x00' >"$out/corpus_can/sdo"
 printf '\x00\x00\x02\x01\x00\x00\x00\x00\x00\x00\x00\x02\x01\x06\x06\x00\x00\x00\x00\x00\x00\x00\x02\x01\x06\x0f\x00\x10\x27\x00\x00\x00\x00\x02\x01\x06\x1f\x00\x10\x27\x00\x00\x00\x00' \
     >"$out/corpus_can/enable"
+# the closed loop (tests/fuzz/fuzz_can.c) brought up and moving: 300 frames
+# the master ignores, 5 ms apart, a path at the 200th, a quick stop at the
+# 260th (data bytes 7 and 8 carry the command)
+for i in $(seq 1 300); do
+    case $i in
+    200) cmd='\x01\x01' ;;
+    260) cmd='\x02\x01' ;;
+    *) cmd='\x00\x00' ;;
+    esac
+    printf "\x07\xff\x50\x00\x00\x00\x00\x00\x00$cmd"
+done >"$out/corpus_can/loop"
 clang -std=c99 -g -O1 -fsanitize=fuzzer,address,undefined \
     -fno-sanitize-recover=all -Iinclude -Ifirmware_sim \
     tests/fuzz/fuzz_can.c firmware_sim/drive.c src/canopen/*.c \

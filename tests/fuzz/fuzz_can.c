@@ -3,7 +3,11 @@
  * frames (id 2 bytes, dlc 1 byte, 8 data bytes), each handed to every
  * decoder, whose results must re-encode, and to a drive and to a master,
  * which must survive any sequence (the master's outbox never overflows
- * silently: it counts what it drops). */
+ * silently: it counts what it drops). The master also runs three drives in
+ * a closed loop (its frames to them, theirs to it, the input's frames
+ * injected into both), so that it gets past bring-up into moving and
+ * stopping; after every stop it is asked for, no set-point may follow the
+ * quick stop. */
 #include <stddef.h>
 #include <stdint.h>
 #include <string.h>
@@ -36,6 +40,33 @@ static uint64_t now(void *ctx)
 }
 
 static const struct can_driver can = {0, no_send, no_receive, now};
+
+/* the closed loop's bus: what the three drives sent since it was read */
+#define BUS_MAX 256
+static struct qrtcan_frame bus[BUS_MAX];
+static int bus_count;
+
+static int bus_send(void *ctx, const struct qrtcan_frame *f)
+{
+    (void)ctx;
+    if (bus_count == BUS_MAX)
+        return -1;
+    bus[bus_count++] = *f;
+    return 0;
+}
+
+static const struct can_driver loop_can = {0, bus_send, no_receive, now};
+
+/* After a stop: every RPDO to the loop's drives carries quick stop. */
+static void check_stop_is_last(const struct qrtcan_frame *out, int n)
+{
+    int k;
+    for (k = 0; k < n; k++)
+        if (out[k].id >= 0x201u && out[k].id <= 0x203u &&
+            (out[k].dlc < 2 || (out[k].data[0] | out[k].data[1] << 8) !=
+                                   QRTCAN_CW_CMD_QUICK_STOP))
+            __builtin_trap();
+}
 
 static void decoders(const struct qrtcan_frame *f)
 {
@@ -91,11 +122,23 @@ static void decoders(const struct qrtcan_frame *f)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    static struct drive d;
+    static struct drive d, loop[3];
     static struct qrtcan_master m;
     struct qrtcan_master_config mc;
     struct drive_config cfg;
     size_t i;
+    int j;
+    bus_count = 0;
+    for (j = 0; j < 3; j++) {
+        memset(&cfg, 0, sizeof cfg);
+        cfg.node = (unsigned)j + 1;
+        cfg.limit_min = -400000;
+        cfg.limit_max = 400000;
+        cfg.servo_error = 3;
+        cfg.watchdog_ms = 200;
+        cfg.master_node = 127;
+        drive_init(&loop[j], &cfg, &loop_can);
+    }
     memset(&cfg, 0, sizeof cfg);
     cfg.node = 1;
     cfg.limit_min = -180000;
@@ -117,27 +160,46 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         f.id = (data[i] & 0x80) ? f.id << 16 : f.id & 0x7FFu;
         f.dlc = data[i + 2];
         memcpy(f.data, &data[i + 3], 8);
+        int stopped = 0, n, k;
+        struct qrtcan_frame out[QRTCAN_MASTER_OUTBOX];
+        struct qrtcan_master_status st;
         decoders(&f);
         drive_on_frame(&d, &f, &can);
+        for (j = 0; j < 3; j++)
+            drive_on_frame(&loop[j], &f, &loop_can);
         (void)qrtcan_master_on_frame(&m, &f, clock_us);
         clock_us += 1000u * (data[i + 2] >> 4);
         drive_tick(&d, &can);
+        for (j = 0; j < 3; j++)
+            drive_tick(&loop[j], &loop_can);
         qrtcan_master_tick(&m, clock_us);
         if (f.data[7] & 1) { /* sometimes a path, a stop or a bus error */
             static const double wp[2][3] = {{0, 0, 0}, {10, -5, 3}};
-            if (f.data[6] & 1)
+            int live =
+                m.state != QRTCAN_MASTER_OFF && m.state != QRTCAN_MASTER_FAULT;
+            if (f.data[6] & 1) {
                 (void)qrtcan_master_set_path(&m, wp, 2, clock_us);
-            else if (f.data[6] & 2)
+            } else if (f.data[6] & 2) {
                 qrtcan_master_quick_stop(&m, clock_us);
-            else if (f.data[6] & 4)
+                stopped = live;
+            } else if (f.data[6] & 4) {
                 qrtcan_master_bus_error(&m, clock_us);
+                stopped = live;
+            }
         }
-        {
-            struct qrtcan_frame out[QRTCAN_MASTER_OUTBOX];
-            struct qrtcan_master_status st;
-            (void)qrtcan_master_take_frames(&m, out, QRTCAN_MASTER_OUTBOX);
-            qrtcan_master_get_status(&m, &st);
+        n = qrtcan_master_take_frames(&m, out, QRTCAN_MASTER_OUTBOX);
+        qrtcan_master_get_status(&m, &st);
+        if (stopped)
+            check_stop_is_last(out, n);
+        for (k = 0; k < n; k++)
+            for (j = 0; j < 3; j++)
+                drive_on_frame(&loop[j], &out[k], &loop_can);
+        for (k = 0; k < bus_count; k++) {
+            (void)qrtcan_master_on_frame(&m, &bus[k], clock_us);
+            for (j = 0; j < 3; j++)
+                drive_on_frame(&loop[j], &bus[k], &loop_can);
         }
+        bus_count = 0;
     }
     return 0;
 }
