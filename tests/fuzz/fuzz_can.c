@@ -153,16 +153,15 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         __builtin_trap();
     qrtcan_master_start(&m, clock_us);
     for (i = 0; i + 11 <= size; i += 11) {
-        struct qrtcan_frame f;
+        struct qrtcan_frame f, out[QRTCAN_MASTER_OUTBOX];
+        struct qrtcan_master_status st;
+        int stopped = 0, n, k;
         /* ids 0..0x7FF mostly, with the top bit of the first byte making
          * the occasional out-of-range identifier */
         f.id = (uint32_t)data[i] << 8 | data[i + 1];
         f.id = (data[i] & 0x80) ? f.id << 16 : f.id & 0x7FFu;
         f.dlc = data[i + 2];
         memcpy(f.data, &data[i + 3], 8);
-        int stopped = 0, n, k;
-        struct qrtcan_frame out[QRTCAN_MASTER_OUTBOX];
-        struct qrtcan_master_status st;
         decoders(&f);
         drive_on_frame(&d, &f, &can);
         for (j = 0; j < 3; j++)
