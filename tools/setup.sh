@@ -37,9 +37,11 @@ py=/usr/bin/python3
 [ -x "$py" ] || py=$(command -v python3)
 stamp=.venv/.requirements.stamp
 if [ ! -x .venv/bin/python ] || ! cmp -s tools/requirements.txt "$stamp"; then
-    echo "setup: creating .venv with $(grep -v '^#' tools/requirements.txt | tr '\n' ' ')"
+    echo "setup: .venv with $(grep -v '^#' tools/requirements.txt | tr '\n' ' ')"
     [ -x .venv/bin/python ] || "$py" -m venv .venv
     .venv/bin/python -m pip install -q --upgrade pip >/dev/null
-    .venv/bin/python -m pip install -q -r tools/requirements.txt
+    # --upgrade: where the requirements changed (a pin loosened), an old
+    # .venv gets what a new machine gets, not the version it already had
+    .venv/bin/python -m pip install -q --upgrade -r tools/requirements.txt
     cp tools/requirements.txt "$stamp"
 fi
