@@ -99,7 +99,8 @@ static unsigned long deliver_after_stop(const char *what,
     for (i = 0; i < n; i++) {
         for (j = 0; j < 3; j++) {
             uint16_t cw;
-            if (out[i].id != 0x200u + m.drive[j].node || out[i].dlc < 2)
+            if (out[i].id != QRTCAN_FN_RPDO1 + m.drive[j].node ||
+                out[i].dlc < 2)
                 continue;
             cw = (uint16_t)(out[i].data[0] | (out[i].data[1] << 8));
             if (cw == QRTCAN_CW_CMD_QUICK_STOP)

@@ -62,7 +62,8 @@ static void check_stop_is_last(const struct qrtcan_frame *out, int n)
 {
     int k;
     for (k = 0; k < n; k++)
-        if (out[k].id >= 0x201u && out[k].id <= 0x203u &&
+        if (out[k].id >= QRTCAN_FN_RPDO1 + 1u &&
+            out[k].id <= QRTCAN_FN_RPDO1 + 3u &&
             (out[k].dlc < 2 || (out[k].data[0] | out[k].data[1] << 8) !=
                                    QRTCAN_CW_CMD_QUICK_STOP))
             __builtin_trap();
