@@ -97,19 +97,22 @@ static unsigned long deliver_after_stop(const char *what,
     int n, i, j;
     n = qrtcan_master_take_frames(&m, out, QRTCAN_MASTER_OUTBOX);
     for (i = 0; i < n; i++) {
+        struct qrtcan_402_rpdo p;
+        unsigned node;
         for (j = 0; j < 3; j++) {
-            uint16_t cw;
-            if (out[i].id != QRTCAN_FN_RPDO1 + m.drive[j].node ||
-                out[i].dlc < 2)
+            if (out[i].id != QRTCAN_FN_RPDO1 + m.drive[j].node)
                 continue;
-            cw = (uint16_t)(out[i].data[0] | (out[i].data[1] << 8));
-            if (cw == QRTCAN_CW_CMD_QUICK_STOP)
+            if (qrtcan_402_rpdo_decode(&out[i], &node, &p) != QRTCAN_OK) {
+                CHECK(0, "%s: malformed RPDO to drive %d", what, j + 1);
+                continue;
+            }
+            if (p.controlword == QRTCAN_CW_CMD_QUICK_STOP)
                 stopped[j] = 1;
             else
                 CHECK(!stopped[j],
                       "%s: controlword 0x%04x to drive %d after its quick "
                       "stop",
-                      what, cw, j + 1);
+                      what, p.controlword, j + 1);
         }
         for (j = 0; j < 3; j++)
             drive_on_frame(&drives[j], &out[i], &can);

@@ -60,12 +60,14 @@ static const struct can_driver loop_can = {0, bus_send, no_receive, now};
 /* After a stop: every RPDO to the loop's drives carries quick stop. */
 static void check_stop_is_last(const struct qrtcan_frame *out, int n)
 {
+    struct qrtcan_402_rpdo p;
+    unsigned node;
     int k;
     for (k = 0; k < n; k++)
         if (out[k].id >= QRTCAN_FN_RPDO1 + 1u &&
             out[k].id <= QRTCAN_FN_RPDO1 + 3u &&
-            (out[k].dlc < 2 || (out[k].data[0] | out[k].data[1] << 8) !=
-                                   QRTCAN_CW_CMD_QUICK_STOP))
+            (qrtcan_402_rpdo_decode(&out[k], &node, &p) != QRTCAN_OK ||
+             p.controlword != QRTCAN_CW_CMD_QUICK_STOP))
             __builtin_trap();
 }
 
