@@ -26,7 +26,7 @@ import sys
 # The only function pointer in the core: qrt_cluster_points calls back its
 # caller's visitor, which in the planner is raster_cluster.
 INDIRECT = {"qrt_cluster_points": ["raster_cluster", "keep_cluster"],
-            "walk": ["need_row"]}
+            "walk": ["node_blocked"]}
 LIBC = {"acos", "asin", "atan2", "cos", "sin", "sincos", "floor", "ceil",
         "fmod", "hypot", "sqrt", "memset", "memcpy"}
 LIBC_FRAME = 64

@@ -158,7 +158,10 @@ struct qrt_planner {
             struct qrt_lazy_clusters clusters;
         } lazy;
     } open;
-    int32_t heap_pos[QRT_MAX_NODES]; /* -1 unseen, -2 closed */
+    /* a node's place on the heap, -2 closed; valid only where the node's
+     * search_seen bit is set (-1 unseen otherwise) */
+    int32_t heap_pos[QRT_MAX_NODES];
+    uint64_t search_seen[(QRT_MAX_NODES + 63) / 64];
     uint8_t parent_dir[QRT_MAX_NODES];
     /* while qrt_planner_plan_now runs: rows are built as they are read */
     int lazy;
@@ -176,8 +179,12 @@ struct qrt_planner {
      * for want of room, rows built without views (an alpha node's did not
      * fit at all) and member discs made without being kept */
     long lazy_forgets, lazy_unviewed_rows, lazy_unkept_discs;
+    long lazy_nodes_asked; /* nodes asked alone (qrt_lazy_node_blocked) */
     struct qrt_raster *lazy_raster; /* on qrt_planner_plan_now's stack */
     uint64_t rows_ready[QRT_ROW_SET_WORDS];
+    /* nodes of rows not built that were asked one at a time (their mask
+     * bits are final) */
+    uint64_t nodes_known[QRT_MAX_NA][QRT_MAX_NS][QRT_ROW_WORDS];
 };
 
 /* QRT_OK; QRT_E_INVALID for non-finite or negative margins, a bad arm or a

@@ -72,6 +72,15 @@ static void keep_cluster(void *ctx, const int32_t *members, int m)
         c->members[k->members++] = members[j];
 }
 
+static void clear_known(struct qrt_planner *pl)
+{
+    int ia, is, w;
+    for (ia = 0; ia < QRT_MAX_NA; ia++)
+        for (is = 0; is < QRT_MAX_NS; is++)
+            for (w = 0; w < QRT_ROW_WORDS; w++)
+                pl->nodes_known[ia][is][w] = 0;
+}
+
 int qrt_lazy_begin(struct qrt_planner *pl, struct qrt_raster *r)
 {
     struct keep_ctx k;
@@ -82,6 +91,7 @@ int qrt_lazy_begin(struct qrt_planner *pl, struct qrt_raster *r)
     pl->lazy_clusters = 0;
     for (w = 0; w < QRT_ROW_SET_WORDS; w++)
         pl->rows_ready[w] = 0;
+    clear_known(pl);
     /* the clustering scratch of a whole build's part 0 */
     if (qrt_cluster_scratch_len(pl->points.count) > QRT_MAX_NODES)
         return 0;
@@ -106,6 +116,7 @@ int qrt_lazy_begin(struct qrt_planner *pl, struct qrt_raster *r)
         return 0;
     forget_views(pl);
     pl->lazy_forgets = pl->lazy_unviewed_rows = pl->lazy_unkept_discs = 0;
+    pl->lazy_nodes_asked = 0;
     pl->lazy_raster = r;
     pl->lazy = 1;
     return 1;
@@ -201,16 +212,63 @@ void qrt_lazy_build(struct qrt_planner *pl, int ia, int is)
     }
     for (k = 0; first >= 0 && k < pl->lazy_alpha_count[ia]; k++) {
         struct qrt_alpha_view *v = &c->t.view[first + k];
-        int m, a, b;
+        uint64_t ask[QRT_ROW_WORDS];
+        int m;
         if (!((v->rows[is >> 6] >> (is & 63)) & 1U))
             continue; /* (asked again inside; most views miss the row) */
         m = c->t.geom[v->cluster].m;
-        if (qrt_raster_view_row(pl->lazy_raster, v, m, ia, is, &a, &b))
-            qrt_raster_view_members(pl->lazy_raster, ia, is, a, b,
+        if (qrt_raster_view_row(pl->lazy_raster, v, m, ia, is, ask))
+            qrt_raster_view_members(pl->lazy_raster, ia, is, ask,
                                     member_discs(pl, ia, v, scratch), m);
     }
     qrt_raster_only_block(pl->lazy_raster, -1, 0, 0);
     mark_ready(pl, ia, is);
+}
+
+/* Node (ia, is, ie) from the kept views of alpha node ia: blocked when
+ * a view's ball and then one of its members (a one-point cluster: the
+ * point) meet it; the first that does ends the question. (Not static,
+ * so that its discs' scratch is not on the stack under qrt_lazy_build.) */
+int qrt_lazy_node_from_views(struct qrt_planner *pl, long first, int ia, int is,
+                             int ie)
+{
+    struct qrt_lazy_clusters *c = &pl->open.lazy.clusters;
+    struct qrt_disc scratch[QRT_CLUSTER_MAX];
+    long k;
+    for (k = 0; k < pl->lazy_alpha_count[ia]; k++) {
+        struct qrt_alpha_view *v = &c->t.view[first + k];
+        int m;
+        if (!((v->rows[is >> 6] >> (is & 63)) & 1U) ||
+            !qrt_raster_node_ball(pl->lazy_raster, v, is, ie))
+            continue;
+        m = c->t.geom[v->cluster].m;
+        if (m == 1 ||
+            qrt_raster_node_members(pl->lazy_raster, is, ie,
+                                    member_discs(pl, ia, v, scratch), m))
+            return 1;
+    }
+    return 0;
+}
+
+int qrt_lazy_node_blocked(struct qrt_planner *pl, const int ijk[3])
+{
+    uint64_t *row = pl->mask.rows[ijk[0]][ijk[1]];
+    uint64_t bit = 1ULL << (ijk[2] & 63);
+    long first;
+    if (qrt_lazy_known(pl, ijk))
+        return (int)((row[ijk[2] >> 6] >> (ijk[2] & 63)) & 1U);
+    first = pl->lazy_raster->sector_ok ? alpha_views(pl, ijk[0]) : -1;
+    if (first < 0) { /* the row, as qrt_lazy_build makes it */
+        qrt_lazy_build(pl, ijk[0], ijk[1]);
+        return (int)((row[ijk[2] >> 6] >> (ijk[2] & 63)) & 1U);
+    }
+    /* link 1 and link 2 block whole rows, rastered before this */
+    if (!(row[ijk[2] >> 6] & bit) &&
+        qrt_lazy_node_from_views(pl, first, ijk[0], ijk[1], ijk[2]))
+        row[ijk[2] >> 6] |= bit;
+    pl->nodes_known[ijk[0]][ijk[1]][ijk[2] >> 6] |= bit;
+    pl->lazy_nodes_asked++;
+    return (row[ijk[2] >> 6] & bit) != 0;
 }
 
 void qrt_lazy_build_rows(struct qrt_planner *pl, const uint64_t *rows)

@@ -38,6 +38,24 @@ static inline void qrt_lazy_need(struct qrt_planner *pl, int ia, int is)
         qrt_lazy_build(pl, ia, is);
 }
 
+/* Is node ijk (inside the lattice) blocked? Where rows are built as they
+ * are read, a node of a row not built yet is asked alone when the sector
+ * test holds (the bit a row build gives it, raster.h), else its row is
+ * built. */
+int qrt_lazy_node_blocked(struct qrt_planner *pl, const int ijk[3]);
+
+/* qrt_lazy_node_blocked's question of alpha node ia's views (from view
+ * first), for a node whose bit is not set yet. */
+int qrt_lazy_node_from_views(struct qrt_planner *pl, long first, int ia, int is,
+                             int ie);
+
+static inline int qrt_lazy_known(const struct qrt_planner *pl, const int ijk[3])
+{
+    return qrt_lazy_ready(pl, ijk[0], ijk[1]) ||
+           ((pl->nodes_known[ijk[0]][ijk[1]][ijk[2] >> 6] >> (ijk[2] & 63)) &
+            1U);
+}
+
 /* Build the rows in rows (bit ia * QRT_MAX_NS + is; NULL: every row) that
  * are not built yet. */
 void qrt_lazy_build_rows(struct qrt_planner *pl, const uint64_t *rows);

@@ -37,9 +37,9 @@ static int cell_of(const struct qrt_lattice *lat, const double x[3], int ijk[3])
  * mask row (alpha, sigma) of every cell the walk would test, and return 1.
  * One walk for both, so a check on rows built from the marks looks at
  * exactly the rows that were built. */
-static int walk(const struct qrt_mask *mask, qrt_row_need need, void *ctx,
-                const double a_deg[3], const double b_deg[3], uint64_t *rows,
-                double *t_hit)
+static int walk(const struct qrt_mask *mask, qrt_node_blocked blocked,
+                void *ctx, const double a_deg[3], const double b_deg[3],
+                uint64_t *rows, double *t_hit)
 {
     const struct qrt_lattice *lat = &mask->lat;
     double x0[3], dx[3], d[3], next_t[3], step_t[3], t = 0.0;
@@ -85,9 +85,7 @@ static int walk(const struct qrt_mask *mask, qrt_row_need need, void *ctx,
                 *t_hit = 0.5 * (t + t_end);
             if (!inside)
                 return 0;
-            if (need)
-                need(ctx, ijk[0], ijk[1]);
-            if (qrt_mask_blocked(mask, ijk))
+            if (blocked ? blocked(ctx, ijk) : qrt_mask_blocked(mask, ijk))
                 return 0;
         }
         if (axis < 0)
@@ -103,11 +101,11 @@ int qrt_motion_free_on_mask(const struct qrt_mask *mask, const double a_deg[3],
     return walk(mask, NULL, NULL, a_deg, b_deg, NULL, NULL);
 }
 
-int qrt_motion_free_on_rows(const struct qrt_mask *mask, qrt_row_need need,
-                            void *ctx, const double a_deg[3],
-                            const double b_deg[3])
+int qrt_motion_free_asking(const struct qrt_mask *mask,
+                           qrt_node_blocked blocked, void *ctx,
+                           const double a_deg[3], const double b_deg[3])
 {
-    return walk(mask, need, ctx, a_deg, b_deg, NULL, NULL);
+    return walk(mask, blocked, ctx, a_deg, b_deg, NULL, NULL);
 }
 
 int qrt_motion_free_on_mask_hit(const struct qrt_mask *mask,

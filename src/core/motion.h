@@ -32,14 +32,15 @@ int qrt_motion_collides_at(const struct qrt_arm *arm, const double radius_m[3],
                            const struct qrt_lattice *lat, const double a_deg[3],
                            const double b_deg[3], double t);
 
-/* Called before a mask row (ia, is) is read, to build it if need be. */
-typedef void (*qrt_row_need)(void *ctx, int ia, int is);
+/* Is node ijk blocked? Asked of a mask whose nodes are found as they are
+ * read. */
+typedef int (*qrt_node_blocked)(void *ctx, const int ijk[3]);
 
-/* qrt_motion_free_on_mask on a mask whose rows are built as they are
- * read: need(ctx, ia, is) before each row is looked at. */
-int qrt_motion_free_on_rows(const struct qrt_mask *mask, qrt_row_need need,
-                            void *ctx, const double a_deg[3],
-                            const double b_deg[3]);
+/* qrt_motion_free_on_mask on a mask whose nodes are found as they are
+ * read: blocked(ctx, ijk) answers for each node instead of the mask. */
+int qrt_motion_free_asking(const struct qrt_mask *mask,
+                           qrt_node_blocked blocked, void *ctx,
+                           const double a_deg[3], const double b_deg[3]);
 
 /* Mark in rows (bit ia * QRT_MAX_NS + is) every mask row that
  * qrt_motion_free_on_mask(mask, a, b) looks at. */

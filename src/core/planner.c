@@ -189,9 +189,9 @@ static void exact_radii(const struct qrt_planner *pl, double radius[3])
         radius[k] = pl->radius_m[k] + shift;
 }
 
-static void need_row(void *ctx, int ia, int is)
+static int node_blocked(void *ctx, const int ijk[3])
 {
-    qrt_lazy_need((struct qrt_planner *)ctx, ia, is);
+    return qrt_lazy_node_blocked((struct qrt_planner *)ctx, ijk);
 }
 
 /* The mask's proof of a straight motion, on rows built as they are read
@@ -200,7 +200,7 @@ static int motion_free(struct qrt_planner *pl, const double a[3],
                        const double b[3])
 {
     if (pl->lazy)
-        return qrt_motion_free_on_rows(&pl->mask, need_row, pl, a, b);
+        return qrt_motion_free_asking(&pl->mask, node_blocked, pl, a, b);
     return qrt_motion_free_on_mask(&pl->mask, a, b);
 }
 
@@ -220,8 +220,7 @@ static void try_end(struct qrt_planner *pl, const double q[3], int ijk[3],
     for (j = 0; j < 3; j++)
         if (ijk[j] < 0 || ijk[j] >= lat->n[j])
             return;
-    qrt_lazy_need(pl, ijk[0], ijk[1]);
-    if (qrt_mask_blocked(&pl->mask, ijk))
+    if (qrt_lazy_node_blocked(pl, ijk))
         return;
     node = qrt_lattice_index(lat, ijk);
     for (j = 0; j < ends->count; j++)

@@ -19,10 +19,6 @@
 #include "fastmath.h"
 #include "geom.h"
 
-/* Open spans up to this many nodes are decided node by node by
- * mark_edge_nodes rather than by each member's eta range. */
-#define SECTOR_SPAN_MAX 4
-
 /* radians added to every angular result: covers rounding and the fast
  * atan2's error (twice: a centre and a half-width each carry it) */
 #define ANG_EPS (2.0 * QRT_FAST_ANGLE_ERR + 1e-9)
@@ -191,12 +187,12 @@ void qrt_raster_setup(struct qrt_raster *r, struct qrt_mask *mask,
     /* directions of the psi nodes j = is + ie, whose sectors span
      * psi_j +- 2h; the sector test needs that to be under half a turn */
     r->sector_ok = 4.0 * r->h < QRT_PI - 1e-6;
-    r->cos_2h = cos(2.0 * r->h);
-    r->sin_2h = sin(2.0 * r->h);
     for (j = 0; j + 1 < lat->n[1] + lat->n[2]; j++) {
         double psi = r->lo[1] + r->lo[2] + j * r->g;
-        r->psi_dir[j][0] = (float)cos(psi);
-        r->psi_dir[j][1] = (float)sin(psi);
+        r->psi_edge[j][0] = (float)cos(psi - 2.0 * r->h);
+        r->psi_edge[j][1] = (float)sin(psi - 2.0 * r->h);
+        r->psi_edge[j][2] = (float)cos(psi + 2.0 * r->h);
+        r->psi_edge[j][3] = (float)sin(psi + 2.0 * r->h);
     }
     /* a float direction is off by < 1e-7 rad, which moves no point of the
      * link by more than this */
@@ -392,8 +388,9 @@ struct elbow_view {
 
 /* 0: link 3 cannot reach the disc for any psi; 2: it touches it for every
  * psi; 1: it depends on psi (v is filled in). */
-static int view_from_elbow(const struct qrt_raster *r, int is,
-                           const struct qrt_disc *dc, struct elbow_view *v)
+static inline int view_from_elbow(const struct qrt_raster *r, int is,
+                                  const struct qrt_disc *dc,
+                                  struct elbow_view *v)
 {
     double far, d2;
     v->wu = dc->cu - r->elbow[is][0];
@@ -408,24 +405,22 @@ static int view_from_elbow(const struct qrt_raster *r, int is,
     return 1;
 }
 
-/* Directions start (rotated by -2h) and end (rotated by +2h) of psi nodes
- * j0 and j1: the edges of the sector link 3 sweeps over those nodes' psi
- * ranges. */
-static void sector_edges(const struct qrt_raster *r, int j0, int j1,
-                         double edge[4])
+/* The edges of the sector link 3 sweeps over psi nodes j0 .. j1: the start
+ * of j0's and the end of j1's. */
+static inline void sector_edges(const struct qrt_raster *r, int j0, int j1,
+                                double edge[4])
 {
-    const float *d0 = r->psi_dir[j0], *d1 = r->psi_dir[j1];
-    edge[0] = d0[0] * r->cos_2h + d0[1] * r->sin_2h;
-    edge[1] = d0[1] * r->cos_2h - d0[0] * r->sin_2h;
-    edge[2] = d1[0] * r->cos_2h - d1[1] * r->sin_2h;
-    edge[3] = d1[1] * r->cos_2h + d1[0] * r->sin_2h;
+    edge[0] = r->psi_edge[j0][0];
+    edge[1] = r->psi_edge[j0][1];
+    edge[2] = r->psi_edge[j1][2];
+    edge[3] = r->psi_edge[j1][3];
 }
 
 /* Does the sector between the edges (radius L3 from the elbow, spanning
  * less than half a turn) come within v->reach of the disc? Asked only
  * where view_from_elbow said 1. */
-static int sector_meets(const struct qrt_raster *r, const double edge[4],
-                        const struct elbow_view *v)
+static inline int sector_meets(const struct qrt_raster *r, const double edge[4],
+                               const struct elbow_view *v)
 {
     const double len = r->arm->link_m[2];
     /* how far the disc's centre lies inside each edge's line (the edges
@@ -453,39 +448,52 @@ static int sector_meets(const struct qrt_raster *r, const double edge[4],
     return 0;
 }
 
-/* The open nodes a..b of a row (b - a < SECTOR_SPAN_MAX), node by node:
- * a node is blocked if link 3, with psi anywhere in the node's range
- * psi_j +- 2h (j = is + ie), comes within a member's reach, the question
- * link3_row_ranges answers for a whole row with approximate angles asked
- * exactly of one node. A member the sector of all of a..b misses is not
- * asked of each node. */
-static void mark_edge_nodes(const struct qrt_raster *r, int is, int a, int b,
-                            const struct qrt_disc *md, int m, uint64_t *row)
+/* The eta nodes of row is that the sector test (node_meets) may find
+ * within reach of disc dc: link3_row_ranges with the reach widened past the
+ * test's slack (sector_eps twice, and 1e-6 m for the factor on its
+ * rejections) and the half-width by 1e-6 rad (its float directions are off
+ * by under 2e-7 rad), so that these ranges hold every node the test
+ * blocks and the ranges only save work, never decide. */
+static int link3_row_candidates(const struct qrt_raster *r, int is,
+                                const struct qrt_disc *dc, int ranges[3][2])
 {
-    double all[4];
-    int j, ie, span_ok = (b - a) * r->g + 4.0 * r->h < QRT_PI - 1e-6;
-    if (span_ok)
-        sector_edges(r, is + a, is + b, all);
-    for (j = 0; j < m; j++) {
-        struct elbow_view v;
-        int seen;
-        if (md[j].reach3 < 0.0)
-            continue;
-        seen = view_from_elbow(r, is, &md[j], &v);
-        if (seen == 0 || (seen == 1 && span_ok && !sector_meets(r, all, &v)))
-            continue;
-        for (ie = a; ie <= b; ie++) {
-            double edge[4];
-            if (bit_set(row, ie))
-                continue;
-            if (seen == 1) {
-                sector_edges(r, is + ie, is + ie, edge);
-                if (!sector_meets(r, edge, &v))
-                    continue;
-            }
-            row[ie >> 6] |= 1ULL << (ie & 63);
-        }
-    }
+    double du = dc->cu - r->elbow[is][0], dz = dc->z - r->elbow[is][1];
+    double reach = dc->reach3 + 2.0 * r->sector_eps + 1e-6;
+    double w =
+        sweep_half_width(sqrt(du * du + dz * dz), r->arm->link_m[2], reach);
+    if (w < 0.0)
+        return 0;
+    return angle_ranges(&r->axis[2],
+                        qrt_fast_atan2(dz, du) - (r->lo[1] + is * r->g),
+                        w + 2.0 * r->h + 1e-6, ranges);
+}
+
+/* Does link 3 on node (is, ie), psi anywhere in psi_j +- 2h, come within
+ * reach of the disc seen from the elbow as (seen, v)? The one test that
+ * decides every link-3 bit where the sector test holds (r->sector_ok), so
+ * that a node's bit is a function of the node and the points alone: rows
+ * built whole and nodes asked one at a time agree bit for bit. */
+static int node_meets(const struct qrt_raster *r, int is, int ie, int seen,
+                      const struct elbow_view *v)
+{
+    double edge[4];
+    if (seen != 1)
+        return seen == 2;
+    sector_edges(r, is + ie, is + ie, edge);
+    return sector_meets(r, edge, v);
+}
+
+/* The open nodes of the ranges, as a set. */
+static void open_set(const uint64_t *row, int ranges[3][2], int n,
+                     uint64_t open[QRT_ROW_WORDS])
+{
+    int i, w;
+    for (w = 0; w < QRT_ROW_WORDS; w++)
+        open[w] = 0;
+    for (i = 0; i < n; i++)
+        set_row_range(open, ranges[i][0], ranges[i][1]);
+    for (w = 0; w < QRT_ROW_WORDS; w++)
+        open[w] &= ~row[w];
 }
 
 /* Any bit lo .. hi - 1 of the set, each taken flipped by flip (~0: any
@@ -528,26 +536,84 @@ static int highest_bit(uint64_t x)
     return lowest_bit(x ^ (x >> 1));
 }
 
-/* The nodes of the ranges not marked yet: their hull [*a, *b]; returns
- * whether there are any. A word at a time. */
-static int open_nodes(const uint64_t *row, int ranges[3][2], int n, int *a,
-                      int *b)
+/* Link 3 of one disc (a point's, or a one-point cluster's ball) on row
+ * is: every open node of its candidate ranges that node_meets blocks (each
+ * whole range where the sector test does not hold). */
+static void mark_disc_row(const struct qrt_raster *r, int is,
+                          const struct qrt_disc *dc, uint64_t *row)
 {
     uint64_t open[QRT_ROW_WORDS];
-    int i, w;
+    struct elbow_view v;
+    int ranges[3][2], n, w, seen;
+    if (!r->sector_ok) {
+        n = link3_row_ranges(r, is, dc, ranges);
+        mark_ranges(row, ranges, n);
+        return;
+    }
+    n = link3_row_candidates(r, is, dc, ranges);
+    if (n == 0 || (seen = view_from_elbow(r, is, dc, &v)) == 0)
+        return;
+    open_set(row, ranges, n, open);
+    for (w = 0; w < QRT_ROW_WORDS; w++) {
+        uint64_t bits = open[w];
+        for (; bits; bits &= bits - 1U) {
+            int ie = (w << 6) + lowest_bit(bits);
+            if (node_meets(r, is, ie, seen, &v))
+                row[w] |= 1ULL << (ie & 63);
+        }
+    }
+}
+
+/* The nodes in ask (open nodes of row is that a cluster's ball blocks)
+ * that a member blocks, by node_meets, member by member (a node set is
+ * not asked again). A member whose disc misses the sector of all of them
+ * by 1 um more than its reach misses each one, far beyond the test's
+ * rounding, so it is not asked of each. */
+static void mark_member_nodes(const struct qrt_raster *r, int is,
+                              const uint64_t ask[QRT_ROW_WORDS],
+                              const struct qrt_disc *md, int m, uint64_t *row)
+{
+    double all[4];
+    uint64_t left;
+    int a = -1, b = -1, j, w, span_ok;
     for (w = 0; w < QRT_ROW_WORDS; w++)
-        open[w] = 0;
-    for (i = 0; i < n; i++)
-        set_row_range(open, ranges[i][0], ranges[i][1]);
-    for (w = 0; w < QRT_ROW_WORDS && !(open[w] & ~row[w]); w++)
-        ;
-    if (w == QRT_ROW_WORDS)
-        return 0;
-    *a = (w << 6) + lowest_bit(open[w] & ~row[w]);
-    for (w = QRT_ROW_WORDS - 1; !(open[w] & ~row[w]); w--)
-        ;
-    *b = (w << 6) + highest_bit(open[w] & ~row[w]);
-    return 1;
+        if (ask[w]) {
+            if (a < 0)
+                a = (w << 6) + lowest_bit(ask[w]);
+            b = (w << 6) + highest_bit(ask[w]);
+        }
+    if (a < 0)
+        return;
+    span_ok = (b - a) * r->g + 4.0 * r->h < QRT_PI - 1e-6;
+    if (span_ok)
+        sector_edges(r, is + a, is + b, all);
+    for (j = 0; j < m; j++) {
+        struct elbow_view v;
+        int seen;
+        if (md[j].reach3 < 0.0)
+            continue;
+        seen = view_from_elbow(r, is, &md[j], &v);
+        if (seen == 1 && span_ok) {
+            struct elbow_view wide = v;
+            wide.reach += 1e-6;
+            if (!sector_meets(r, all, &wide))
+                seen = 0;
+        }
+        if (seen == 0)
+            continue;
+        left = 0;
+        for (w = 0; w < QRT_ROW_WORDS; w++) {
+            uint64_t bits = ask[w] & ~row[w];
+            for (; bits; bits &= bits - 1U) {
+                int ie = (w << 6) + lowest_bit(bits);
+                if (node_meets(r, is, ie, seen, &v))
+                    row[w] |= 1ULL << (ie & 63);
+            }
+            left |= ask[w] & ~row[w];
+        }
+        if (!left)
+            return; /* every node asked is blocked */
+    }
 }
 
 /* Links 2 and 3 of one point for the cell boxes of alpha node ia. */
@@ -563,11 +629,9 @@ static void raster_plane(const struct qrt_raster *r, int ia, double rho,
     nrows = link3_rows(r, &pl, rows);
     for (k = 0; k < nrows; k++)
         for (is = rows[k][0]; is <= rows[k][1]; is++) {
-            int ranges[3][2], n;
             if (bit_set(full, is) || !wanted(r, ia, is))
                 continue;
-            n = link3_row_ranges(r, is, &pl.dc, ranges);
-            mark_ranges(r->mask->rows[ia][is], ranges, n);
+            mark_disc_row(r, is, &pl.dc, r->mask->rows[ia][is]);
         }
 }
 
@@ -730,30 +794,49 @@ void qrt_raster_member_discs(const struct qrt_raster *r, const float (*pts)[3],
 
 static inline int view_row(const struct qrt_raster *r,
                            const struct qrt_alpha_view *v, int m, int ia,
-                           int is, int *a, int *b)
+                           int is, uint64_t ask[QRT_ROW_WORDS])
 {
     uint64_t *row = r->mask->rows[ia][is];
-    int ranges[3][2], n;
+    struct elbow_view ev;
+    int ranges[3][2], n, w, seen;
+    uint64_t any = 0;
     if (!bit_set(v->rows, is))
         return 0;
-    n = link3_row_ranges(r, is, &v->disc, ranges);
     if (m == 1) { /* the point itself, as qrt_raster_point takes it */
-        mark_ranges(row, ranges, n);
+        mark_disc_row(r, is, &v->disc, row);
         return 0;
     }
-    return n > 0 && open_nodes(row, ranges, n, a, b);
+    if (!r->sector_ok) { /* every member's range where the ball's is open */
+        n = link3_row_ranges(r, is, &v->disc, ranges);
+        open_set(row, ranges, n, ask);
+        for (w = 0; w < QRT_ROW_WORDS; w++)
+            any |= ask[w];
+        return n > 0 && any != 0;
+    }
+    n = link3_row_candidates(r, is, &v->disc, ranges);
+    if (n == 0 || (seen = view_from_elbow(r, is, &v->disc, &ev)) == 0)
+        return 0;
+    open_set(row, ranges, n, ask);
+    for (w = 0; w < QRT_ROW_WORDS; w++) {
+        uint64_t open = ask[w];
+        for (; open; open &= open - 1U) {
+            int ie = (w << 6) + lowest_bit(open);
+            if (!node_meets(r, is, ie, seen, &ev))
+                ask[w] &= ~(1ULL << (ie & 63));
+        }
+        any |= ask[w];
+    }
+    return any != 0;
 }
 
 static inline void view_members(const struct qrt_raster *r, int ia, int is,
-                                int a, int b, const struct qrt_disc *md, int m)
+                                const uint64_t ask[QRT_ROW_WORDS],
+                                const struct qrt_disc *md, int m)
 {
     uint64_t *row = r->mask->rows[ia][is];
     int j;
-    if (r->sector_ok && b - a < SECTOR_SPAN_MAX) {
-        /* a few nodes at the edge of what is blocked: no member can truly
-         * block one outside the ball's range, so only these are asked of
-         * each member */
-        mark_edge_nodes(r, is, a, b, md, m, row);
+    if (r->sector_ok) {
+        mark_member_nodes(r, is, ask, md, m, row);
         return;
     }
     for (j = 0; j < m; j++) {
@@ -767,15 +850,52 @@ static inline void view_members(const struct qrt_raster *r, int ia, int is,
 
 int qrt_raster_view_row(const struct qrt_raster *r,
                         const struct qrt_alpha_view *v, int m, int ia, int is,
-                        int *a, int *b)
+                        uint64_t ask[QRT_ROW_WORDS])
 {
-    return view_row(r, v, m, ia, is, a, b);
+    return view_row(r, v, m, ia, is, ask);
 }
 
-void qrt_raster_view_members(const struct qrt_raster *r, int ia, int is, int a,
-                             int b, const struct qrt_disc *md, int m)
+void qrt_raster_view_members(const struct qrt_raster *r, int ia, int is,
+                             const uint64_t ask[QRT_ROW_WORDS],
+                             const struct qrt_disc *md, int m)
 {
-    view_members(r, ia, is, a, b, md, m);
+    view_members(r, ia, is, ask, md, m);
+}
+
+int qrt_raster_node_ball(const struct qrt_raster *r,
+                         const struct qrt_alpha_view *v, int is, int ie)
+{
+    struct elbow_view ev;
+    int seen;
+    if (!bit_set(v->rows, is))
+        return 0;
+    seen = view_from_elbow(r, is, &v->disc, &ev);
+    return seen != 0 && node_meets(r, is, ie, seen, &ev);
+}
+
+int qrt_raster_node_members(const struct qrt_raster *r, int is, int ie,
+                            const struct qrt_disc *md, int m)
+{
+    double edge[4];
+    int j, edge_ready = 0;
+    for (j = 0; j < m; j++) {
+        struct elbow_view ev;
+        int seen;
+        if (md[j].reach3 < 0.0)
+            continue;
+        seen = view_from_elbow(r, is, &md[j], &ev);
+        if (seen == 2)
+            return 1;
+        if (seen == 0)
+            continue;
+        if (!edge_ready) {
+            sector_edges(r, is + ie, is + ie, edge);
+            edge_ready = 1;
+        }
+        if (sector_meets(r, edge, &ev))
+            return 1;
+    }
+    return 0;
 }
 
 /* A cluster of nearby points shares the link-3 work. Its bounding ball
@@ -792,7 +912,8 @@ void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
 {
     struct qrt_alpha_view v;
     struct qrt_disc md[QRT_CLUSTER_MAX];
-    int a, b, discs_ready = 0, w;
+    uint64_t ask[QRT_ROW_WORDS];
+    int discs_ready = 0, w;
     if (!owns(r, ia) || !((g->alpha[ia >> 6] >> (ia & 63)) & 1U))
         return;
     if (!qrt_raster_view_make(r, pts, members, mrho, g, ia, &v))
@@ -801,13 +922,13 @@ void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
         uint64_t rows = v.rows[w]; /* the rows link 3 may reach, in order */
         for (; rows; rows &= rows - 1U) {
             int is = (w << 6) + lowest_bit(rows);
-            if (!wanted(r, ia, is) || !view_row(r, &v, g->m, ia, is, &a, &b))
+            if (!wanted(r, ia, is) || !view_row(r, &v, g->m, ia, is, ask))
                 continue;
             if (!discs_ready) {
                 qrt_raster_member_discs(r, pts, members, mrho, g->m, ia, md);
                 discs_ready = 1;
             }
-            view_members(r, ia, is, a, b, md, g->m);
+            view_members(r, ia, is, ask, md, g->m);
         }
     }
 }

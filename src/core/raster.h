@@ -31,10 +31,10 @@ struct qrt_raster {
     /* this raster writes only alpha nodes ia with ia % nparts == part, so
      * that parts can run at once on different cores */
     int part, nparts;
-    /* link 3's direction on each psi node j = is + ie (cos, sin); its
-     * sector there spans psi_j +- 2h; sector_eps covers the float rounding */
-    float psi_dir[QRT_MAX_NS + QRT_MAX_NE - 1][2];
-    double cos_2h, sin_2h;
+    /* the edges of link 3's sector on each psi node j = is + ie, which
+     * spans psi_j +- 2h: the directions (cos, sin) of psi_j - 2h and of
+     * psi_j + 2h, as floats (off by < 1e-7 rad, which sector_eps covers) */
+    float psi_edge[QRT_MAX_NS + QRT_MAX_NE - 1][4];
     /* NULL, or the only rows to raster (bit ia * QRT_MAX_NS + is); other
      * rows may be left partly written */
     const uint64_t *only_rows;
@@ -100,25 +100,39 @@ void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
 
 /* qrt_raster_cluster_at in steps, for rows built one at a time from views
  * kept between them (the same bits as qrt_raster_cluster_at on the same
- * rows in the same order):
+ * rows):
  * - _view_make: the cluster at alpha node ia (the caller owns ia); rasters
  *   link 2, whose rows are blocked whole, for every row at once. Returns 0
  *   where no member can touch links 2 or 3.
  * - _view_row: link 3 on row is; returns 1 when the members must be asked
- *   about the row's open nodes a .. b of the ball's range.
+ *   about the open nodes in ask (those of the row the ball blocks).
  * - _member_discs: the m members' discs at ia (m <= QRT_CLUSTER_MAX).
- * - _view_members: asks them. */
+ * - _view_members: asks them.
+ *
+ * Where r->sector_ok (every grid under 90 degrees), a link-3 bit is set
+ * exactly when link 2 blocks the row, or some cluster's ball and one of
+ * its members (a one-point cluster: the point) both meet the node by the
+ * sector test: a function of the node and the clusters alone, in any order.
+ * So one node can be asked without its row, and gets the bit a row build
+ * gives it:
+ * - _node_ball: does view v's ball meet node (is, ie)?
+ * - _node_members: does one of the m members' discs? */
 int qrt_raster_view_make(const struct qrt_raster *r, const float (*pts)[3],
                          const int32_t *members, const double *mrho,
                          const struct qrt_cluster_geom *g, int ia,
                          struct qrt_alpha_view *v);
 int qrt_raster_view_row(const struct qrt_raster *r,
                         const struct qrt_alpha_view *v, int m, int ia, int is,
-                        int *a, int *b);
+                        uint64_t ask[QRT_ROW_WORDS]);
 void qrt_raster_member_discs(const struct qrt_raster *r, const float (*pts)[3],
                              const int32_t *members, const double *mrho, int m,
                              int ia, struct qrt_disc *md);
-void qrt_raster_view_members(const struct qrt_raster *r, int ia, int is, int a,
-                             int b, const struct qrt_disc *md, int m);
+void qrt_raster_view_members(const struct qrt_raster *r, int ia, int is,
+                             const uint64_t ask[QRT_ROW_WORDS],
+                             const struct qrt_disc *md, int m);
+int qrt_raster_node_ball(const struct qrt_raster *r,
+                         const struct qrt_alpha_view *v, int is, int ie);
+int qrt_raster_node_members(const struct qrt_raster *r, int is, int ie,
+                            const struct qrt_disc *md, int m);
 
 #endif

@@ -20,6 +20,19 @@ void qrt_search_direction(int dir, int offset[3])
     offset[2] = code % 3 - 1;
 }
 
+/* heap_pos[node] means something only for a node this search has seen
+ * (pushed): the seen bits are cleared per search instead of heap_pos. */
+static inline int seen_node(const struct qrt_planner *pl, long node)
+{
+    return (int)((pl->search_seen[node >> 6] >> (node & 63)) & 1U);
+}
+
+/* The node's place on the heap, or -1 (never pushed) or -2 (closed). */
+static inline int32_t place_of(const struct qrt_planner *pl, long node)
+{
+    return seen_node(pl, node) ? pl->heap_pos[node] : -1;
+}
+
 static int heap_less(const struct qrt_heap_entry *a,
                      const struct qrt_heap_entry *b)
 {
@@ -71,10 +84,11 @@ static void push_or_lower(struct qrt_planner *pl, long *size, long node,
     struct qrt_heap_entry e;
     e.key = key;
     e.node = (int32_t)node;
-    if (pl->heap_pos[node] >= 0) {
+    if (place_of(pl, node) >= 0) {
         pl->open.heap[pl->heap_pos[node]] = e;
         sift_up(pl, pl->heap_pos[node]);
     } else {
+        pl->search_seen[node >> 6] |= 1ULL << (node & 63);
         /* the lazily built mask keeps its clusters in the heap's tail:
          * finish the mask before the heap grows into them */
         if (pl->lazy && *size >= QRT_LAZY_HEAP)
@@ -211,8 +225,8 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
     if (!pl->lazy)
         pl->lazy_kept = 0; /* the heap may use the whole array */
     init_estimate(&est, lat, goals, use_astar);
-    for (i = 0; i < n_nodes; i++)
-        pl->heap_pos[i] = -1;
+    for (i = 0; i < (n_nodes + 63) / 64; i++)
+        pl->search_seen[i] = 0;
     res->found = 0;
     res->goal_node = -1;
     res->cost = HUGE_VAL;
@@ -222,7 +236,7 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
         long node = seeds->node[i];
         int ijk[3];
         qrt_lattice_coords(lat, node, ijk);
-        if (pl->heap_pos[node] >= 0 && pl->search.dist[node] <= seeds->cost[i])
+        if (place_of(pl, node) >= 0 && pl->search.dist[node] <= seeds->cost[i])
             continue;
         pl->search.dist[node] = (float)seeds->cost[i];
         pl->parent_dir[node] = QRT_NO_PARENT;
@@ -243,11 +257,11 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
             sift_down(pl, 0, size);
         }
         qrt_lattice_coords(lat, u, ijk);
-        /* a node pushed before its row was built is asked now, so that
-         * rows are built for the nodes the search takes, not for every
-         * neighbour it looks at */
-        qrt_lazy_need(pl, ijk[0], ijk[1]);
-        if (qrt_mask_bit(&pl->mask, ijk))
+        /* a node pushed before it was known is asked now, so that only
+         * the nodes the search takes are asked, not every neighbour it
+         * looks at */
+        if (qrt_lazy_known(pl, ijk) ? qrt_mask_bit(&pl->mask, ijk)
+                                    : qrt_lazy_node_blocked(pl, ijk))
             continue;
         res->expanded++;
         slot = goal_slot(goals, u);
@@ -264,6 +278,7 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
                  ijk[1] < lat->n[1] - 1 && ijk[2] > 0 && ijk[2] < lat->n[2] - 1;
         for (d = 0; d < 26; d++) {
             int nb[3];
+            int32_t place;
             long v;
             float g;
             if (inside) {
@@ -274,13 +289,15 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
             } else if ((v = neighbour(lat, ijk, offsets[d], nb)) < 0) {
                 continue;
             }
-            if (pl->heap_pos[v] == -2)
+            place = place_of(pl, v);
+            if (place == -2)
                 continue;
-            /* a node whose row is not built yet is checked when taken */
-            if (qrt_lazy_ready(pl, nb[0], nb[1]) && qrt_mask_bit(&pl->mask, nb))
+            /* a bit set is final even in a row not built yet; a node not
+             * known yet is checked when taken */
+            if (qrt_mask_bit(&pl->mask, nb))
                 continue;
             g = pl->search.dist[u] + dir_cost[d];
-            if (pl->heap_pos[v] >= 0 && pl->search.dist[v] <= g)
+            if (place >= 0 && pl->search.dist[v] <= g)
                 continue;
             pl->search.dist[v] = g;
             pl->parent_dir[v] = (uint8_t)d;
