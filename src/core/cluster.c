@@ -16,7 +16,7 @@ static long table_size(long n)
 
 long qrt_cluster_scratch_len(long n)
 {
-    return table_size(n) + n;
+    return table_size(n) + 2 * n;
 }
 
 static void cube_of(const float p[3], double inv_cell, long key[3])
@@ -24,6 +24,31 @@ static void cube_of(const float p[3], double inv_cell, long key[3])
     int k;
     for (k = 0; k < 3; k++)
         key[k] = qrt_floor((double)p[k] * inv_cell);
+}
+
+/* A cube's key packed into 30 bits (10 per axis), or -1 when it does not
+ * fit (then keys are compared whole): the walk below compares each point's
+ * cube with its chain's without computing it again. */
+static int32_t packed(const long key[3])
+{
+    int k;
+    for (k = 0; k < 3; k++)
+        if (key[k] < -512 || key[k] > 511)
+            return -1;
+    return (int32_t)(((key[0] + 512) << 20) | ((key[1] + 512) << 10) |
+                     (key[2] + 512));
+}
+
+/* Do points a and b lie in the same cube? */
+static int same_cube(const float (*pts)[3], const int32_t *cube, long a, long b,
+                     double inv_cell)
+{
+    long ka[3], kb[3];
+    if (cube[a] >= 0 || cube[b] >= 0)
+        return cube[a] == cube[b];
+    cube_of(pts[a], inv_cell, ka);
+    cube_of(pts[b], inv_cell, kb);
+    return ka[0] == kb[0] && ka[1] == kb[1] && ka[2] == kb[2];
 }
 
 static long slot_of(const long key[3], long size)
@@ -40,7 +65,7 @@ void qrt_cluster_points(const float (*pts)[3], long n, double cell_m,
                         qrt_cluster_visit visit, void *ctx)
 {
     long size = table_size(n), i, s;
-    int32_t *head = scratch, *next = scratch + size;
+    int32_t *head = scratch, *next = scratch + size, *cube = next + n;
     int32_t members[64];
     double inv_cell = 1.0 / cell_m;
     if (max_members > 64)
@@ -51,6 +76,7 @@ void qrt_cluster_points(const float (*pts)[3], long n, double cell_m,
         long key[3];
         cube_of(pts[i], inv_cell, key);
         s = slot_of(key, size);
+        cube[i] = packed(key);
         next[i] = head[s];
         head[s] = (int32_t)i;
     }
@@ -59,14 +85,11 @@ void qrt_cluster_points(const float (*pts)[3], long n, double cell_m,
      * empty. */
     for (s = 0; s < size; s++)
         while (head[s] >= 0) {
-            long want[3], prev = -1, e = head[s];
+            long first = head[s], prev = -1, e = head[s];
             int m = 0;
-            cube_of(pts[head[s]], inv_cell, want);
             while (e >= 0) {
-                long key[3], nxt = next[e];
-                cube_of(pts[e], inv_cell, key);
-                if (key[0] == want[0] && key[1] == want[1] &&
-                    key[2] == want[2]) {
+                long nxt = next[e];
+                if (same_cube(pts, cube, e, first, inv_cell)) {
                     if (prev < 0)
                         head[s] = (int32_t)nxt;
                     else
