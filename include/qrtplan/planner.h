@@ -121,6 +121,7 @@ union qrt_lazy_table {
     struct qrt_alpha_view
         view[QRT_LAZY_TABLE_BYTES / (long)sizeof(struct qrt_alpha_view)];
     struct qrt_disc disc[QRT_LAZY_TABLE_BYTES / (long)sizeof(struct qrt_disc)];
+    int32_t list[QRT_LAZY_TABLE_BYTES / (long)sizeof(int32_t)];
 };
 struct qrt_lazy_clusters {
     union qrt_lazy_table t;
@@ -175,6 +176,13 @@ struct qrt_planner {
      * lazy_alpha_count[ia] from view lazy_alpha_first[ia] (-1: none) */
     long lazy_views_top;
     int32_t lazy_alpha_first[QRT_MAX_NA], lazy_alpha_count[QRT_MAX_NA];
+    /* where they fit (lazy_lists), each alpha node's kept clusters (those
+     * whose window holds it) are listed from table entry
+     * lazy_alpha_list[ia] (int32s right after the clusters, up to byte
+     * lazy_lists_end), lazy_alpha_clusters[ia] of them */
+    int32_t lazy_alpha_list[QRT_MAX_NA], lazy_alpha_clusters[QRT_MAX_NA];
+    long lazy_lists_end;
+    int lazy_lists;
     /* since the clusters were kept: how often the views were all forgotten
      * for want of room, rows built without views (an alpha node's did not
      * fit at all) and member discs made without being kept */

@@ -1,6 +1,7 @@
 /* Mask rows built as they are read (see lazy.h). */
 #include "lazy.h"
 
+#include "bits.h"
 #include "cluster.h"
 #include "raster.h"
 
@@ -17,11 +18,11 @@ static long clusters_end(const struct qrt_planner *pl)
 }
 
 /* Forget every view and disc kept (the table's bytes after the clusters
- * are free again). */
+ * and their lists are free again). */
 static void forget_views(struct qrt_planner *pl)
 {
     int ia;
-    pl->lazy_views_top = clusters_end(pl);
+    pl->lazy_views_top = pl->lazy_lists_end;
     for (ia = 0; ia < QRT_MAX_NA; ia++) {
         pl->lazy_alpha_first[ia] = -1;
         pl->lazy_alpha_count[ia] = 0;
@@ -81,6 +82,46 @@ static void clear_known(struct qrt_planner *pl)
                 pl->nodes_known[ia][is][w] = 0;
 }
 
+/* List each alpha node's kept clusters, in cluster order, right after
+ * the clusters, so that its views are made from them alone; where the
+ * lists do not fit, every cluster is asked instead (lazy_lists 0). */
+static void make_alpha_lists(struct qrt_planner *pl)
+{
+    struct qrt_lazy_clusters *c = &pl->open.lazy.clusters;
+    long i, at = (clusters_end(pl) + 3) / 4, total = 0, end;
+    int ia, w;
+    pl->lazy_lists = 0;
+    pl->lazy_lists_end = clusters_end(pl);
+    for (ia = 0; ia < QRT_MAX_NA; ia++)
+        pl->lazy_alpha_clusters[ia] = 0;
+    for (i = 0; i < pl->lazy_clusters; i++)
+        for (w = 0; w < QRT_ALPHA_WORDS; w++) {
+            uint64_t bits = c->t.geom[i].alpha[w];
+            for (; bits; bits &= bits - 1U)
+                pl->lazy_alpha_clusters[(w << 6) + qrt_lowest_bit(bits)]++;
+        }
+    for (ia = 0; ia < QRT_MAX_NA; ia++) {
+        pl->lazy_alpha_list[ia] = (int32_t)(at + total);
+        total += pl->lazy_alpha_clusters[ia];
+        pl->lazy_alpha_count[ia] = 0; /* a cursor until forget_views */
+    }
+    end = (at + total) * (long)sizeof(int32_t);
+    if (end > clusters_end(pl) + QRT_LAZY_VIEW_BYTES ||
+        end > QRT_LAZY_TABLE_BYTES)
+        return;
+    for (i = 0; i < pl->lazy_clusters; i++)
+        for (w = 0; w < QRT_ALPHA_WORDS; w++) {
+            uint64_t bits = c->t.geom[i].alpha[w];
+            for (; bits; bits &= bits - 1U) {
+                ia = (w << 6) + qrt_lowest_bit(bits);
+                c->t.list[pl->lazy_alpha_list[ia] +
+                          pl->lazy_alpha_count[ia]++] = (int32_t)i;
+            }
+        }
+    pl->lazy_lists = 1;
+    pl->lazy_lists_end = end;
+}
+
 int qrt_lazy_begin(struct qrt_planner *pl, struct qrt_raster *r)
 {
     struct keep_ctx k;
@@ -114,6 +155,7 @@ int qrt_lazy_begin(struct qrt_planner *pl, struct qrt_raster *r)
     }
     if (!k.ok)
         return 0;
+    make_alpha_lists(pl);
     forget_views(pl);
     pl->lazy_forgets = pl->lazy_unviewed_rows = pl->lazy_unkept_discs = 0;
     pl->lazy_nodes_asked = 0;
@@ -136,11 +178,14 @@ static long alpha_views(struct qrt_planner *pl, int ia)
     const long size = (long)sizeof(struct qrt_alpha_view);
     struct qrt_lazy_clusters *c = &pl->open.lazy.clusters;
     const float(*pts)[3] = (const float(*)[3])pl->points.xyz;
-    long i, n = 0, first, k = 0;
+    long i, n = 0, first, k = 0, e, count;
     if (pl->lazy_alpha_first[ia] >= 0)
         return pl->lazy_alpha_first[ia];
-    for (i = 0; i < pl->lazy_clusters; i++)
-        n += (c->t.geom[i].alpha[ia >> 6] >> (ia & 63)) & 1U;
+    if (pl->lazy_lists)
+        n = pl->lazy_alpha_clusters[ia];
+    else
+        for (i = 0; i < pl->lazy_clusters; i++)
+            n += (c->t.geom[i].alpha[ia >> 6] >> (ia & 63)) & 1U;
     first = table_take(pl, n, size);
     if (first < 0) {
         forget_views(pl);
@@ -151,9 +196,12 @@ static long alpha_views(struct qrt_planner *pl, int ia)
         pl->lazy_unviewed_rows++;
         return -1;
     }
-    for (i = 0; i < pl->lazy_clusters; i++) {
-        const struct qrt_cluster_geom *g = &c->t.geom[i];
+    count = pl->lazy_lists ? n : pl->lazy_clusters;
+    for (e = 0; e < count; e++) {
+        const struct qrt_cluster_geom *g;
         struct qrt_alpha_view *v = &c->t.view[first + k];
+        i = pl->lazy_lists ? c->t.list[pl->lazy_alpha_list[ia] + e] : e;
+        g = &c->t.geom[i];
         if (((g->alpha[ia >> 6] >> (ia & 63)) & 1U) &&
             qrt_raster_view_make(pl->lazy_raster, pts, c->members + g->first,
                                  c->member_rho + g->first, g, ia, v)) {

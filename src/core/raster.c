@@ -16,6 +16,7 @@
 #include <math.h>
 #include <stddef.h>
 
+#include "bits.h"
 #include "fastmath.h"
 #include "geom.h"
 
@@ -512,30 +513,6 @@ static int any_bit(const uint64_t *set, long lo, long hi, uint64_t flip)
     return 0;
 }
 
-/* Index of the lowest set bit of x (x != 0), by a de Bruijn sequence (the
- * core uses no compiler builtins). */
-static int lowest_bit(uint64_t x)
-{
-    static const unsigned char at[64] = {
-        0,  1,  48, 2,  57, 49, 28, 3,  61, 58, 50, 42, 38, 29, 17, 4,
-        62, 55, 59, 36, 53, 51, 43, 22, 45, 39, 33, 30, 24, 18, 12, 5,
-        63, 47, 56, 27, 60, 41, 37, 16, 54, 35, 52, 21, 44, 32, 23, 11,
-        46, 26, 40, 15, 34, 20, 31, 10, 25, 14, 19, 9,  13, 8,  7,  6};
-    return at[((x & (~x + 1U)) * 0x03F79D71B4CB0A89ULL) >> 58];
-}
-
-/* Index of the highest set bit of x (x != 0). */
-static int highest_bit(uint64_t x)
-{
-    x |= x >> 1;
-    x |= x >> 2;
-    x |= x >> 4;
-    x |= x >> 8;
-    x |= x >> 16;
-    x |= x >> 32;
-    return lowest_bit(x ^ (x >> 1));
-}
-
 /* Link 3 of one disc (a point's, or a one-point cluster's ball) on row
  * is: every open node of its candidate ranges that node_meets blocks (each
  * whole range where the sector test does not hold). */
@@ -557,7 +534,7 @@ static void mark_disc_row(const struct qrt_raster *r, int is,
     for (w = 0; w < QRT_ROW_WORDS; w++) {
         uint64_t bits = open[w];
         for (; bits; bits &= bits - 1U) {
-            int ie = (w << 6) + lowest_bit(bits);
+            int ie = (w << 6) + qrt_lowest_bit(bits);
             if (node_meets(r, is, ie, seen, &v))
                 row[w] |= 1ULL << (ie & 63);
         }
@@ -579,8 +556,8 @@ static void mark_member_nodes(const struct qrt_raster *r, int is,
     for (w = 0; w < QRT_ROW_WORDS; w++)
         if (ask[w]) {
             if (a < 0)
-                a = (w << 6) + lowest_bit(ask[w]);
-            b = (w << 6) + highest_bit(ask[w]);
+                a = (w << 6) + qrt_lowest_bit(ask[w]);
+            b = (w << 6) + qrt_highest_bit(ask[w]);
         }
     if (a < 0)
         return;
@@ -605,7 +582,7 @@ static void mark_member_nodes(const struct qrt_raster *r, int is,
         for (w = 0; w < QRT_ROW_WORDS; w++) {
             uint64_t bits = ask[w] & ~row[w];
             for (; bits; bits &= bits - 1U) {
-                int ie = (w << 6) + lowest_bit(bits);
+                int ie = (w << 6) + qrt_lowest_bit(bits);
                 if (node_meets(r, is, ie, seen, &v))
                     row[w] |= 1ULL << (ie & 63);
             }
@@ -820,7 +797,7 @@ static inline int view_row(const struct qrt_raster *r,
     for (w = 0; w < QRT_ROW_WORDS; w++) {
         uint64_t open = ask[w];
         for (; open; open &= open - 1U) {
-            int ie = (w << 6) + lowest_bit(open);
+            int ie = (w << 6) + qrt_lowest_bit(open);
             if (!node_meets(r, is, ie, seen, &ev))
                 ask[w] &= ~(1ULL << (ie & 63));
         }
@@ -921,7 +898,7 @@ void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
     for (w = 0; w < QRT_SIGMA_WORDS; w++) {
         uint64_t rows = v.rows[w]; /* the rows link 3 may reach, in order */
         for (; rows; rows &= rows - 1U) {
-            int is = (w << 6) + lowest_bit(rows);
+            int is = (w << 6) + qrt_lowest_bit(rows);
             if (!wanted(r, ia, is) || !view_row(r, &v, g->m, ia, is, ask))
                 continue;
             if (!discs_ready) {

@@ -293,6 +293,8 @@ static void fraction_built(void)
           built, total);
 #ifdef QRT_LAZY_VIEW_BYTES
     /* a build with less room for views: the ways out were taken */
+    CHECK(!pl.lazy_lists, "spheres in %d bytes: the alpha lists fit",
+          QRT_LAZY_VIEW_BYTES);
     CHECK(QRT_LAZY_VIEW_BYTES > 1000 ? pl.lazy_forgets > 0
                                      : pl.lazy_unviewed_rows > 0,
           "spheres in %d bytes: %ld forgets, %ld rows without views, %ld "
@@ -300,7 +302,9 @@ static void fraction_built(void)
           QRT_LAZY_VIEW_BYTES, pl.lazy_forgets, pl.lazy_unviewed_rows,
           pl.lazy_unkept_discs);
 #else
-    /* the table holds every view and disc this plan makes */
+    /* the table holds the alpha lists and every view and disc this plan
+     * makes */
+    CHECK(pl.lazy_lists, "spheres: no alpha lists");
     CHECK(pl.lazy_forgets == 0 && pl.lazy_unviewed_rows == 0 &&
               pl.lazy_unkept_discs == 0,
           "spheres: %ld forgets, %ld rows without views, %ld discs not kept",

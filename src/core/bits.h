@@ -1,0 +1,32 @@
+/* Bit scans on 64-bit words, shared by the raster and the row builder.
+ * Internal. */
+#ifndef QRT_CORE_BITS_H
+#define QRT_CORE_BITS_H
+
+#include <stdint.h>
+
+/* Index of the lowest set bit of x (x != 0), by a de Bruijn sequence (the
+ * core uses no compiler builtins). */
+static inline int qrt_lowest_bit(uint64_t x)
+{
+    static const unsigned char at[64] = {
+        0,  1,  48, 2,  57, 49, 28, 3,  61, 58, 50, 42, 38, 29, 17, 4,
+        62, 55, 59, 36, 53, 51, 43, 22, 45, 39, 33, 30, 24, 18, 12, 5,
+        63, 47, 56, 27, 60, 41, 37, 16, 54, 35, 52, 21, 44, 32, 23, 11,
+        46, 26, 40, 15, 34, 20, 31, 10, 25, 14, 19, 9,  13, 8,  7,  6};
+    return at[((x & (~x + 1U)) * 0x03F79D71B4CB0A89ULL) >> 58];
+}
+
+/* Index of the highest set bit of x (x != 0). */
+static inline int qrt_highest_bit(uint64_t x)
+{
+    x |= x >> 1;
+    x |= x >> 2;
+    x |= x >> 4;
+    x |= x >> 8;
+    x |= x >> 16;
+    x |= x >> 32;
+    return qrt_lowest_bit(x ^ (x >> 1));
+}
+
+#endif
