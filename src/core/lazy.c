@@ -282,14 +282,12 @@ int qrt_lazy_node_from_views(struct qrt_planner *pl, long first, int ia, int is,
 {
     struct qrt_lazy_clusters *c = &pl->open.lazy.clusters;
     struct qrt_disc scratch[QRT_CLUSTER_MAX];
-    long k;
-    for (k = 0; k < pl->lazy_alpha_count[ia]; k++) {
+    const struct qrt_alpha_view *views = &c->t.view[first];
+    long k, n = pl->lazy_alpha_count[ia];
+    for (k = qrt_raster_next_ball(pl->lazy_raster, views, 0, n, is, ie); k < n;
+         k = qrt_raster_next_ball(pl->lazy_raster, views, k + 1, n, is, ie)) {
         struct qrt_alpha_view *v = &c->t.view[first + k];
-        int m;
-        if (!((v->rows[is >> 6] >> (is & 63)) & 1U) ||
-            !qrt_raster_node_ball(pl->lazy_raster, v, is, ie))
-            continue;
-        m = c->t.geom[v->cluster].m;
+        int m = c->t.geom[v->cluster].m;
         if (m == 1 ||
             qrt_raster_node_members(pl->lazy_raster, is, ie,
                                     member_discs(pl, ia, v, scratch), m))

@@ -839,39 +839,75 @@ void qrt_raster_view_members(const struct qrt_raster *r, int ia, int is,
     view_members(r, ia, is, ask, md, m);
 }
 
-int qrt_raster_node_ball(const struct qrt_raster *r,
-                         const struct qrt_alpha_view *v, int is, int ie)
+/* One node's sector, loaded once for many discs. */
+struct node_sector {
+    double e[4];   /* its edges */
+    double eu, ez; /* the elbow */
+    double len;
+    int j; /* psi node */
+};
+
+static inline void node_sector_of(const struct qrt_raster *r, int is, int ie,
+                                  struct node_sector *ns)
+{
+    sector_edges(r, is + ie, is + ie, ns->e);
+    ns->eu = r->elbow[is][0];
+    ns->ez = r->elbow[is][1];
+    ns->len = r->arm->link_m[2];
+    ns->j = is + ie;
+}
+
+/* node_meets(view_from_elbow(dc)) written out for the common answers, the
+ * same arithmetic in the same order. */
+static inline int disc_meets_node(const struct qrt_raster *r,
+                                  const struct node_sector *ns,
+                                  const struct qrt_disc *dc)
 {
     struct elbow_view ev;
-    int seen;
-    if (!bit_set(v->rows, is))
+    double d2, far, in0, in1, out;
+    ev.wu = dc->cu - ns->eu;
+    ev.wz = dc->z - ns->ez;
+    ev.reach = dc->reach3 + r->sector_eps;
+    d2 = ev.wu * ev.wu + ev.wz * ev.wz;
+    far = ns->len + ev.reach;
+    if (d2 > far * far)
         return 0;
-    seen = view_from_elbow(r, is, &v->disc, &ev);
-    return seen != 0 && node_meets(r, is, ie, seen, &ev);
+    if (d2 <= ev.reach * ev.reach)
+        return 1;
+    in0 = ns->e[0] * ev.wz - ns->e[1] * ev.wu;
+    in1 = ev.wu * ns->e[3] - ev.wz * ns->e[2];
+    if (in0 >= 0.0 && in1 >= 0.0)
+        return 1;
+    out = -ev.reach * (1.0 + 1e-6);
+    if (in0 < out || in1 < out)
+        return 0;
+    return sector_meets(r, ns->e, &ev);
+}
+
+long qrt_raster_next_ball(const struct qrt_raster *r,
+                          const struct qrt_alpha_view *views, long k, long n,
+                          int is, int ie)
+{
+    const uint64_t row_bit = 1ULL << (is & 63);
+    const int word = is >> 6;
+    struct node_sector ns;
+    node_sector_of(r, is, ie, &ns);
+    for (; k < n; k++)
+        if ((views[k].rows[word] & row_bit) &&
+            disc_meets_node(r, &ns, &views[k].disc))
+            return k;
+    return n;
 }
 
 int qrt_raster_node_members(const struct qrt_raster *r, int is, int ie,
                             const struct qrt_disc *md, int m)
 {
-    double edge[4];
-    int j, edge_ready = 0;
-    for (j = 0; j < m; j++) {
-        struct elbow_view ev;
-        int seen;
-        if (md[j].reach3 < 0.0)
-            continue;
-        seen = view_from_elbow(r, is, &md[j], &ev);
-        if (seen == 2)
+    struct node_sector ns;
+    int j;
+    node_sector_of(r, is, ie, &ns);
+    for (j = 0; j < m; j++)
+        if (md[j].reach3 >= 0.0 && disc_meets_node(r, &ns, &md[j]))
             return 1;
-        if (seen == 0)
-            continue;
-        if (!edge_ready) {
-            sector_edges(r, is + ie, is + ie, edge);
-            edge_ready = 1;
-        }
-        if (sector_meets(r, edge, &ev))
-            return 1;
-    }
     return 0;
 }
 

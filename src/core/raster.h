@@ -115,7 +115,8 @@ void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
  * sector test: a function of the node and the clusters alone, in any order.
  * So one node can be asked without its row, and gets the bit a row build
  * gives it:
- * - _node_ball: does view v's ball meet node (is, ie)?
+ * - _next_ball: the first of views[k .. n-1] whose ball meets node
+ *   (is, ie) by the sector test, or n;
  * - _node_members: does one of the m members' discs? */
 int qrt_raster_view_make(const struct qrt_raster *r, const float (*pts)[3],
                          const int32_t *members, const double *mrho,
@@ -130,8 +131,9 @@ void qrt_raster_member_discs(const struct qrt_raster *r, const float (*pts)[3],
 void qrt_raster_view_members(const struct qrt_raster *r, int ia, int is,
                              const uint64_t ask[QRT_ROW_WORDS],
                              const struct qrt_disc *md, int m);
-int qrt_raster_node_ball(const struct qrt_raster *r,
-                         const struct qrt_alpha_view *v, int is, int ie);
+long qrt_raster_next_ball(const struct qrt_raster *r,
+                          const struct qrt_alpha_view *views, long k, long n,
+                          int is, int ie);
 int qrt_raster_node_members(const struct qrt_raster *r, int is, int ie,
                             const struct qrt_disc *md, int m);
 
