@@ -260,8 +260,9 @@ struct plane {
 
 /* extra: added to both link radii (a cluster's ball radius). Returns
  * whether link 2 or link 3 can touch the point at this alpha node. */
-static int plane_at(const struct qrt_raster *r, int ia, const double p[3],
-                    double rho, double extra, struct plane *pl)
+static inline int plane_or_disc_at(const struct qrt_raster *r, int ia,
+                                   const double p[3], double rho, double extra,
+                                   int disc_only, struct plane *pl)
 {
     double cos_c = 1.0, sin_c = 0.0, sin_min, cos_min, cos_max, v, spread, cu;
     double rad2 = r->radius_m[1] + extra, rad3 = r->radius_m[2] + extra;
@@ -273,7 +274,7 @@ static int plane_at(const struct qrt_raster *r, int ia, const double p[3],
     v = rho * sin_min; /* nearest the point comes to the arm's plane */
     pl->hit2 = v < rad2;
     pl->hit3 = v < rad3;
-    if (!pl->hit2 && !pl->hit3)
+    if (disc_only ? !pl->hit3 : !pl->hit2 && !pl->hit3)
         return 0;
     /* the point's radial coordinate seen from P1 spans cu +- spread; the
      * disc's centre is kept as floats, and both reaches grow by what that
@@ -283,8 +284,13 @@ static int plane_at(const struct qrt_raster *r, int ia, const double p[3],
     pl->dc.cu = (float)cu;
     pl->dc.z = (float)p[2];
     spread += fabs(cu - (double)pl->dc.cu) + fabs(p[2] - (double)pl->dc.z);
-    pl->d = sqrt((double)pl->dc.cu * pl->dc.cu + (double)pl->dc.z * pl->dc.z);
-    pl->reach2 = pl->hit2 ? sqrt(rad2 * rad2 - v * v) + spread : 0.0;
+    pl->d = 0.0;
+    pl->reach2 = 0.0;
+    if (!disc_only) {
+        pl->d =
+            sqrt((double)pl->dc.cu * pl->dc.cu + (double)pl->dc.z * pl->dc.z);
+        pl->reach2 = pl->hit2 ? sqrt(rad2 * rad2 - v * v) + spread : 0.0;
+    }
     /* a float rounds off by under 2^-24 of itself: rounded up */
     pl->dc.reach3 =
         pl->hit3
@@ -292,6 +298,12 @@ static int plane_at(const struct qrt_raster *r, int ia, const double p[3],
                       (1.0 + 2.4e-7))
             : -1.0f;
     return 1;
+}
+
+static int plane_at(const struct qrt_raster *r, int ia, const double p[3],
+                    double rho, double extra, struct plane *pl)
+{
+    return plane_or_disc_at(r, ia, p, rho, extra, 0, pl);
 }
 
 /* Sigma rows link 2 can hit for this disc (whole rows: link 2 does not
@@ -686,7 +698,8 @@ void qrt_raster_cluster_prepare(const struct qrt_raster *r,
             hi[k] = p[k] > hi[k] ? p[k] : hi[k];
         }
         mrho[j] = sqrt(p[0] * p[0] + p[1] * p[1]);
-        raster_link1(r, mrho[j], p);
+        if (fabs(p[2]) < r->radius_m[0]) /* (raster_link1's own first test) */
+            raster_link1(r, mrho[j], p);
     }
     for (k = 0; k < 3; k++)
         g->c[k] = 0.5 * (lo[k] + hi[k]);
@@ -761,10 +774,14 @@ void qrt_raster_member_discs(const struct qrt_raster *r, const float (*pts)[3],
                              int ia, struct qrt_disc *md)
 {
     int j;
-    for (j = 0; j < m; j++) {
+    for (j = 0; j < m; j++) { /* only link 3's disc (plane_at's dc) */
         struct plane pl;
+        double p[3];
+        int k;
+        for (k = 0; k < 3; k++)
+            p[k] = pts[members[j]][k];
         md[j].reach3 = -1.0f;
-        if (member_plane(r, ia, pts, members, mrho, j, &pl))
+        if (plane_or_disc_at(r, ia, p, mrho[j], 0.0, 1, &pl))
             md[j] = pl.dc;
     }
 }
