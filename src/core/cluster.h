@@ -8,7 +8,7 @@
 /* Edge of the cubes that group points for the raster: larger groups share
  * more work, but their bounding balls are less often already covered. */
 #ifndef QRT_CLUSTER_CELL_M
-#define QRT_CLUSTER_CELL_M 0.04
+#define QRT_CLUSTER_CELL_M 0.05
 #endif
 
 /* Points this far apart on average fall one to a cube of QRT_CLUSTER_CELL_M

@@ -562,7 +562,7 @@ static void mark_member_nodes(const struct qrt_raster *r, int is,
                               const uint64_t ask[QRT_ROW_WORDS],
                               const struct qrt_disc *md, int m, uint64_t *row)
 {
-    double all[4];
+    double all[4] = {0.0, 0.0, 0.0, 0.0};
     uint64_t left;
     int a = -1, b = -1, j, w, span_ok;
     for (w = 0; w < QRT_ROW_WORDS; w++)
