@@ -128,6 +128,10 @@ struct qrt_lazy_clusters {
     double member_rho[QRT_LAZY_MAX_POINTS]; /* each member's distance from
                                                the base axis */
     int32_t members[QRT_LAZY_MAX_POINTS];
+    /* bit per lattice node (index (ia * ns + is) * ne + ie): nodes of rows
+     * not built yet that were asked one at a time (their mask bits are
+     * final); kept with the clusters, in the heap's room */
+    uint64_t known[(QRT_MAX_NODES + 63) / 64];
 };
 #define QRT_LAZY_HEAP                                                          \
     (QRT_MAX_NODES - (long)((sizeof(struct qrt_lazy_clusters) +                \
@@ -190,9 +194,6 @@ struct qrt_planner {
     long lazy_nodes_asked; /* nodes asked alone (qrt_lazy_node_blocked) */
     struct qrt_raster *lazy_raster; /* on qrt_planner_plan_now's stack */
     uint64_t rows_ready[QRT_ROW_SET_WORDS];
-    /* nodes of rows not built that were asked one at a time (their mask
-     * bits are final) */
-    uint64_t nodes_known[QRT_MAX_NA][QRT_MAX_NS][QRT_ROW_WORDS];
 };
 
 /* QRT_OK; QRT_E_INVALID for non-finite or negative margins, a bad arm or a
@@ -228,13 +229,15 @@ int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
 
 /* qrt_planner_build_mask and qrt_planner_plan in one, with less work: the
  * plan is the same (the same waypoints, cost and nodes expanded), but only
- * the mask rows it reads are built, as the search, the start and goal
- * connections and the shortcuts read them. plan->cells_blocked is -1 (the
+ * the mask nodes it reads are found, as the search, the start and goal
+ * connections and the shortcuts read them: one node at a time where the
+ * sector test holds (every grid under 90 degrees), each with the bit the
+ * whole mask gives it, else a row at a time. plan->cells_blocked is -1 (the
  * whole mask was not built), and the mask is left partial: a later
  * qrt_planner_plan or qrt_planner_check_path needs qrt_planner_build_mask
  * first. Same return codes as qrt_planner_plan, without the stale mask.
  *
- * The rows it builds, and those qrt_planner_check_path_now and
+ * The nodes and rows it finds, and the rows qrt_planner_check_path_now and
  * qrt_planner_plan_straight build, are kept with the points' clusters
  * until the points change (or a whole mask or plain qrt_planner_plan needs
  * the room): each of these three calls on the same points goes on from

@@ -67,12 +67,16 @@ for profile in paper small; do
     if python3 - "$out/$profile/table4.log" "$out/$profile/host_plan.json" <<'PY'
 import json, sys
 board = {}
-wps = []
+wps, now_wps = [], []
 for line in open(sys.argv[1]):
     k, _, v = line.strip().partition(" ")
     if k == "waypoint":
         wps.append([float(x) for x in v.split()])
-    elif k in ("status", "cells_blocked", "nodes_expanded", "cost_deg"):
+    elif k == "now_waypoint":
+        now_wps.append([float(x) for x in v.split()])
+    elif k in ("status", "cells_blocked", "nodes_expanded", "cost_deg",
+               "now_status", "now_nodes_expanded", "now_cost_deg",
+               "stack_used"):
         board[k] = v
 host = json.load(open(sys.argv[2]))
 same = (board.get("status") == host["status"] and
@@ -81,7 +85,18 @@ same = (board.get("status") == host["status"] and
         # the host's JSON gives the cost to 1e-6 degree; the waypoints it
         # is the length of are compared exactly
         round(float(board["cost_deg"]), 6) == host["cost_deg"] and
-        wps == host["waypoints_deg"])
+        wps == host["waypoints_deg"] and
+        # qrt_planner_plan_now on the board: the same plan
+        board.get("now_status") == host["status"] and
+        int(board.get("now_nodes_expanded", -1)) == host["stats"]["nodes_expanded"] and
+        board.get("now_cost_deg") == board["cost_deg"] and now_wps == wps)
+# the deepest the stack went (painted at reset), with 1 KiB to spare
+used, _, size = board.get("stack_used", "0 of 0").partition(" of ")
+stack_ok = 0 < int(used) <= int(size) - 1024
+print(f"    board: stack {used} of {size} B used"
+      f"{'' if stack_ok else ' (too close to the end, or not measured)'}; "
+      f"qrt_planner_plan_now: {board.get('now_status')}, {len(now_wps)} waypoints")
+same = same and stack_ok
 print(f"    board: {board.get('status')}, {board.get('cells_blocked')} blocked, "
       f"{len(wps)} waypoints {wps}")
 print(f"    host:  {host['status']}, {host['stats']['cells_blocked']} blocked, "

@@ -3,13 +3,17 @@
  * with the core exactly as the host's `qrtplan plan` does, and printed with
  * every double in full (%.17g) so that run.sh can compare it with the
  * host's plan bit for bit. Exit 0 when the plan is ok. */
+#include <stdint.h>
 #include <stdio.h>
 
 #include "qrtplan/qrtplan.h"
 #include "table4_scene.h"
 
 static struct qrt_planner pl; /* the whole state: .bss */
-static struct qrt_plan plan;
+static struct qrt_plan plan;  /* (one: the small profile's 512 KiB) */
+
+extern unsigned long mps2_stack_used(void); /* startup.c */
+extern uint32_t __stack_bottom__, __stack_top__;
 
 int main(void)
 {
@@ -40,5 +44,20 @@ int main(void)
     for (i = 0; i < plan.n_waypoints; i++)
         printf("waypoint %.17g %.17g %.17g\n", plan.waypoints_deg[i][0],
                plan.waypoints_deg[i][1], plan.waypoints_deg[i][2]);
+    /* the same plan with only the nodes it reads (the core's deepest
+     * stack path), which must equal the host's too */
+    if ((rc = qrt_planner_plan_now(&pl, &s, &g, &plan)) != QRT_OK) {
+        printf("error %s\n", qrt_err_name(rc));
+        return 1;
+    }
+    printf("now_status %s\n", qrt_plan_status_name(plan.status));
+    printf("now_nodes_expanded %ld\n", plan.nodes_expanded);
+    printf("now_cost_deg %.17g\n", plan.cost_deg);
+    for (i = 0; i < plan.n_waypoints; i++)
+        printf("now_waypoint %.17g %.17g %.17g\n", plan.waypoints_deg[i][0],
+               plan.waypoints_deg[i][1], plan.waypoints_deg[i][2]);
+    printf("stack_used %lu of %lu\n", mps2_stack_used(),
+           (unsigned long)((const char *)&__stack_top__ -
+                           (const char *)&__stack_bottom__));
     return plan.status == QRT_STATUS_OK ? 0 : 1;
 }

@@ -36,7 +36,7 @@ static const char help[] =
     "       --dijkstra      plain Dijkstra instead of A* (same cost, more "
     "work)\n"
     "       --no-simplify   return the lattice path without shortcuts\n"
-    "       --as-read       build only the mask rows the plan reads, as it\n"
+    "       --as-read       find only the mask nodes the plan reads, as it\n"
     "                       reads them (qrt_planner_plan_now): the same plan,\n"
     "                       sooner; stats then say cells_blocked -1 and put\n"
     "                       the whole time under search\n"

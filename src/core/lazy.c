@@ -75,11 +75,9 @@ static void keep_cluster(void *ctx, const int32_t *members, int m)
 
 static void clear_known(struct qrt_planner *pl)
 {
-    int ia, is, w;
-    for (ia = 0; ia < QRT_MAX_NA; ia++)
-        for (is = 0; is < QRT_MAX_NS; is++)
-            for (w = 0; w < QRT_ROW_WORDS; w++)
-                pl->nodes_known[ia][is][w] = 0;
+    long w, words = (qrt_lattice_node_count(&pl->mask.lat) + 63) / 64;
+    for (w = 0; w < words; w++)
+        pl->open.lazy.clusters.known[w] = 0;
 }
 
 /* List each alpha node's kept clusters, in cluster order, right after
@@ -312,7 +310,10 @@ int qrt_lazy_node_blocked(struct qrt_planner *pl, const int ijk[3])
     if (!(row[ijk[2] >> 6] & bit) &&
         qrt_lazy_node_from_views(pl, first, ijk[0], ijk[1], ijk[2]))
         row[ijk[2] >> 6] |= bit;
-    pl->nodes_known[ijk[0]][ijk[1]][ijk[2] >> 6] |= bit;
+    {
+        long k = qrt_lazy_known_bit(pl, ijk);
+        pl->open.lazy.clusters.known[k >> 6] |= 1ULL << (k & 63);
+    }
     pl->lazy_nodes_asked++;
     return (row[ijk[2] >> 6] & bit) != 0;
 }

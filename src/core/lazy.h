@@ -49,11 +49,23 @@ int qrt_lazy_node_blocked(struct qrt_planner *pl, const int ijk[3]);
 int qrt_lazy_node_from_views(struct qrt_planner *pl, long first, int ia, int is,
                              int ie);
 
+/* Bit of node ijk in the kept clusters' known set. */
+static inline long qrt_lazy_known_bit(const struct qrt_planner *pl,
+                                      const int ijk[3])
+{
+    const int *n = pl->mask.lat.n;
+    return ((long)ijk[0] * n[1] + ijk[1]) * n[2] + ijk[2];
+}
+
+/* Is node ijk's bit there to read (its row built, it was asked alone, or
+ * the mask is whole)? */
 static inline int qrt_lazy_known(const struct qrt_planner *pl, const int ijk[3])
 {
-    return qrt_lazy_ready(pl, ijk[0], ijk[1]) ||
-           ((pl->nodes_known[ijk[0]][ijk[1]][ijk[2] >> 6] >> (ijk[2] & 63)) &
-            1U);
+    long bit;
+    if (qrt_lazy_ready(pl, ijk[0], ijk[1]))
+        return 1;
+    bit = qrt_lazy_known_bit(pl, ijk);
+    return (int)((pl->open.lazy.clusters.known[bit >> 6] >> (bit & 63)) & 1U);
 }
 
 /* Build the rows in rows (bit ia * QRT_MAX_NS + is; NULL: every row) that

@@ -32,7 +32,7 @@ const char *kUsage =
     "  --status-channel NAME    1 Hz daemon status (QRT_STATUS)\n"
     "  --window SECONDS         obstacle picture = every scan of the last\n"
     "                           SECONDS per sensor (0: the latest scan only)\n"
-    "  --mask as-read|whole     build only the mask rows the plan reads,\n"
+    "  --mask as-read|whole     find only the mask nodes the plan reads,\n"
     "                           as it reads them, or the whole mask first\n"
     "                           (as-read; the plan is the same)\n"
     "  --mask-threads 1|2       build a whole mask on 1 or 2 threads (2)\n"

@@ -98,7 +98,15 @@ static int row_ready(int ia, int is)
 
 static int known_bit(int ia, int is, int ie)
 {
-    return (int)((pl.nodes_known[ia][is][ie >> 6] >> (ie & 63)) & 1U);
+    int ijk[3];
+    long bit;
+    ijk[0] = ia;
+    ijk[1] = is;
+    ijk[2] = ie;
+    /* the kept set itself: after the plan, rows are no longer built as
+     * read, so qrt_lazy_known says every node */
+    bit = qrt_lazy_known_bit(&pl, ijk);
+    return (int)((pl.open.lazy.clusters.known[bit >> 6] >> (bit & 63)) & 1U);
 }
 
 /* Nodes known (in rows built, or asked alone) whose bit differs from the
