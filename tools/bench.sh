@@ -23,7 +23,7 @@ if command -v valgrind >/dev/null; then
     total=$(count plan_end_to_end)
     whole=$(count plan_whole_mask)
     echo "callgrind, 10 spheres x 1444 points, one end-to-end plan (init," \
-        "points, plan with the rows it reads): $total instructions;" \
+        "points, plan asking the nodes it reads): $total instructions;" \
         "with the whole mask first: $whole" | tee -a "$out/table5.txt"
 fi
 

@@ -98,7 +98,7 @@ def main():
         w.writerows(rows)
     lat = np.array(lat)
     mask = np.array([r[4] for r in rows if r[4] != ""], float) / 1e3
-    how = ("mask rows built as the plan reads them (mask + search)"
+    how = ("mask nodes asked as the plan reads them (mask + search)"
            if args.mask == "as-read" else
            f"whole mask on {args.mask_threads} thread(s)")
     print(f"qrtpland scan-to-plan latency, 10 spheres x 1444 points, "

@@ -1,6 +1,6 @@
 /* The paper's Table 5 experiment, timed: n spheres x k points (its Eq. 13
- * family, src/cli/gen.c), end to end (init + points + plan with only the
- * mask rows it reads, qrt_planner_plan_now), median of repeated runs,
+ * family, src/cli/gen.c), end to end (init + points + plan asking only the
+ * mask nodes it reads, qrt_planner_plan_now), median of repeated runs,
  * beside the paper's seconds; each run alternates with the same plan from
  * the whole mask (qrt_planner_build_mask + qrt_planner_plan), which gives
  * the conversion / search split. Also 10 spheres with 10^4, 10^5 and 10^6
@@ -105,7 +105,7 @@ static void scene_for(int n, struct sphere_layout *L, double start[3],
 }
 
 /* One end-to-end plan as qrtplan makes it (init, points, then
- * qrt_planner_plan_now: only the mask rows the plan reads are built).
+ * qrt_planner_plan_now: only the mask nodes the plan reads are asked).
  * Never inlined: tools/bench.sh counts its instructions with callgrind's
  * --toggle-collect, which must name one function that is entered once per
  * plan (the qrt_planner_* calls nest, and nested matches would toggle the
@@ -281,7 +281,7 @@ int main(int argc, char **argv)
     }
     if (single_n > 0) {
         run_cell(single_n, single_k, repeats, &c);
-        printf("%d x %d: %s, median %.3f ms (rows built as read); whole mask "
+        printf("%d x %d: %s, median %.3f ms (nodes asked as read); whole mask "
                "%.3f ms (convert %.3f ms, search %.3f ms); %ld nodes expanded\n",
                single_n, single_k, c.status, c.median_ms, c.whole_ms,
                c.convert_ms, c.search_ms, c.expanded);
@@ -341,7 +341,7 @@ int main(int argc, char **argv)
     }
     {
         /* one and two threads for the whole mask, alternating, so that
-         * machine noise falls on both alike, beside the rows built as read */
+         * machine noise falls on both alike, beside the nodes asked as read */
         double one[15], two[15], lazy[15];
         int saved = mask_threads, rep = repeats < 15 ? repeats : 15;
         for (i = 0; i < rep; i++) {
@@ -359,7 +359,7 @@ int main(int argc, char **argv)
         qsort(lazy, (size_t)rep, sizeof *lazy, cmp_double);
         printf("\n10 x 1444, whole mask on two threads "
                "(qrt_planner_build_mask_part): median %.2f ms vs %.2f ms on "
-               "one (%.2fx); rows built as read (qrt_planner_plan_now, one "
+               "one (%.2fx); nodes asked as read (qrt_planner_plan_now, one "
                "thread) %.2f ms (%.2fx the whole mask on one); %d runs each\n",
                two[rep / 2], one[rep / 2], one[rep / 2] / two[rep / 2],
                lazy[rep / 2], one[rep / 2] / lazy[rep / 2], rep);

@@ -43,7 +43,7 @@ def run_one(args):
     with tempfile.TemporaryDirectory() as d:
         path = Path(d) / "scene.json"
         path.write_text(json.dumps(scene))
-        # every other scene with the mask rows built as the plan reads them
+        # every other scene with the mask nodes asked as the plan reads them
         as_read = ["--as-read"] if seed % 2 else []
         r = subprocess.run([str(BIN), "plan", str(path)] + as_read,
                            capture_output=True, text=True, timeout=120)

@@ -311,9 +311,9 @@ int main(int argc, char **argv)
         std::fprintf(stderr, "\r[%zu/%zu] %s          ", si + 1, scenes.size(),
                      scenes[si]);
         for (int rep = 0; rep < repeats; rep++) {
-            // ours, end to end: points, then a plan that builds only the
-            // mask rows it reads (the straight motion first, on its own
-            // rows; the search's rows as it reads them)
+            // ours, end to end: points, then a plan that finds only the
+            // mask nodes it reads (the straight motion first, on its own
+            // rows; the search's nodes as it takes them)
             double t0 = now_ms();
             qrt_planner_init(&pl, &sc.params);
             qrt_planner_add_points(&pl, sc.points, sc.n_points);
