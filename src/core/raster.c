@@ -401,13 +401,12 @@ struct elbow_view {
 
 /* 0: link 3 cannot reach the disc for any psi; 2: it touches it for every
  * psi; 1: it depends on psi (v is filled in). */
-static inline int view_from_elbow(const struct qrt_raster *r, int is,
-                                  const struct qrt_disc *dc,
-                                  struct elbow_view *v)
+static inline int view_from(const struct qrt_raster *r, double eu, double ez,
+                            const struct qrt_disc *dc, struct elbow_view *v)
 {
     double far, d2;
-    v->wu = dc->cu - r->elbow[is][0];
-    v->wz = dc->z - r->elbow[is][1];
+    v->wu = dc->cu - eu;
+    v->wz = dc->z - ez;
     v->reach = dc->reach3 + r->sector_eps;
     d2 = v->wu * v->wu + v->wz * v->wz;
     far = r->arm->link_m[2] + v->reach;
@@ -416,6 +415,13 @@ static inline int view_from_elbow(const struct qrt_raster *r, int is,
     if (d2 <= v->reach * v->reach)
         return 2;
     return 1;
+}
+
+static inline int view_from_elbow(const struct qrt_raster *r, int is,
+                                  const struct qrt_disc *dc,
+                                  struct elbow_view *v)
+{
+    return view_from(r, r->elbow[is][0], r->elbow[is][1], dc, v);
 }
 
 /* The edges of the sector link 3 sweeps over psi nodes j0 .. j1: the start
@@ -860,8 +866,6 @@ void qrt_raster_view_members(const struct qrt_raster *r, int ia, int is,
 struct node_sector {
     double e[4];   /* its edges */
     double eu, ez; /* the elbow */
-    double len;
-    int j; /* psi node */
 };
 
 static inline void node_sector_of(const struct qrt_raster *r, int is, int ie,
@@ -870,34 +874,17 @@ static inline void node_sector_of(const struct qrt_raster *r, int is, int ie,
     sector_edges(r, is + ie, is + ie, ns->e);
     ns->eu = r->elbow[is][0];
     ns->ez = r->elbow[is][1];
-    ns->len = r->arm->link_m[2];
-    ns->j = is + ie;
 }
 
-/* node_meets(view_from_elbow(dc)) written out for the common answers, the
- * same arithmetic in the same order. */
+/* node_meets(view_from_elbow(dc)) with the node's sector loaded once. */
 static inline int disc_meets_node(const struct qrt_raster *r,
                                   const struct node_sector *ns,
                                   const struct qrt_disc *dc)
 {
     struct elbow_view ev;
-    double d2, far, in0, in1, out;
-    ev.wu = dc->cu - ns->eu;
-    ev.wz = dc->z - ns->ez;
-    ev.reach = dc->reach3 + r->sector_eps;
-    d2 = ev.wu * ev.wu + ev.wz * ev.wz;
-    far = ns->len + ev.reach;
-    if (d2 > far * far)
-        return 0;
-    if (d2 <= ev.reach * ev.reach)
-        return 1;
-    in0 = ns->e[0] * ev.wz - ns->e[1] * ev.wu;
-    in1 = ev.wu * ns->e[3] - ev.wz * ns->e[2];
-    if (in0 >= 0.0 && in1 >= 0.0)
-        return 1;
-    out = -ev.reach * (1.0 + 1e-6);
-    if (in0 < out || in1 < out)
-        return 0;
+    int seen = view_from(r, ns->eu, ns->ez, dc, &ev);
+    if (seen != 1)
+        return seen == 2;
     return sector_meets(r, ns->e, &ev);
 }
 
