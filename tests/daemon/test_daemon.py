@@ -227,13 +227,18 @@ def test_fresh_sensor_ids_cannot_grow_the_picture(daemon):
     rss0 = d.rss_kib()
     # 1,100 sent, 1,000 awaited: loopback UDP may lose a few in a burst.
     # Sent in bunches of 50 (125 KB), well inside the daemon's receive
-    # buffer: one 2.7 MB burst once lost 114 while a busy machine kept the
-    # daemon from reading.
+    # buffer, and every 200 no more than 200 ahead of what the daemon's
+    # (1 Hz) status says it has read: one 2.7 MB burst once lost 114 while a
+    # busy machine kept the daemon from reading, and bunches paced only by
+    # time lost 107 in CI while a build ran beside it.
     for i in range(1100):
         c.publish("QRT_SCAN", scan_from_points([[0.5, 0.5, 0.5]] * 200,
                                                sensor=f"x{i}"))
         if i % 50 == 49:
             time.sleep(0.02)
+        if i % 200 == 199:
+            c.wait_status(lambda s, sent=i + 1: s.scans_received +
+                          s.scans_rejected >= sent - 200, timeout=3.0)
     st = c.wait_status(lambda s: s.scans_received + s.scans_rejected >= 1000)
     assert st is not None, d.text()
     assert st.scans_received == 32 and st.scans_rejected >= 1000 - 32, (
