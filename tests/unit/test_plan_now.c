@@ -220,8 +220,11 @@ static void random_plans(void)
     CHECK(kept * 5 >= test_count(200), "only %ld plans went on from kept rows",
           kept);
 #if defined(QRT_LAZY_VIEW_BYTES) && QRT_LAZY_VIEW_BYTES < 1000
-    /* the way out for members' discs that do not fit was taken */
-    CHECK(unkept > 0, "no members' discs made without being kept");
+    /* the way out for members' discs that do not fit was taken (in a few
+     * of the 200 plans: under emulation, a twentieth of them are run, too
+     * few to meet one) */
+    if (test_count(200) >= 200)
+        CHECK(unkept > 0, "no members' discs made without being kept");
 #endif
 }
 
