@@ -531,32 +531,48 @@ static int any_bit(const uint64_t *set, long lo, long hi, uint64_t flip)
     return 0;
 }
 
+/* The open nodes of row is, among disc dc's candidates, that node_meets
+ * blocks for dc, into out; returns whether there are any. Where the sector
+ * test holds only. */
+static int disc_row_nodes(const struct qrt_raster *r, int is,
+                          const struct qrt_disc *dc, const uint64_t *row,
+                          uint64_t out[QRT_ROW_WORDS])
+{
+    struct elbow_view v;
+    int ranges[3][2], n, w, seen;
+    uint64_t any = 0;
+    n = link3_row_candidates(r, is, dc, ranges);
+    if (n == 0 || (seen = view_from_elbow(r, is, dc, &v)) == 0)
+        return 0;
+    open_set(row, ranges, n, out);
+    for (w = 0; w < QRT_ROW_WORDS; w++) {
+        uint64_t bits = out[w];
+        for (; bits; bits &= bits - 1U) {
+            int ie = (w << 6) + qrt_lowest_bit(bits);
+            if (!node_meets(r, is, ie, seen, &v))
+                out[w] &= ~(1ULL << (ie & 63));
+        }
+        any |= out[w];
+    }
+    return any != 0;
+}
+
 /* Link 3 of one disc (a point's, or a one-point cluster's ball) on row
  * is: every open node of its candidate ranges that node_meets blocks (each
  * whole range where the sector test does not hold). */
 static void mark_disc_row(const struct qrt_raster *r, int is,
                           const struct qrt_disc *dc, uint64_t *row)
 {
-    uint64_t open[QRT_ROW_WORDS];
-    struct elbow_view v;
-    int ranges[3][2], n, w, seen;
+    uint64_t nodes[QRT_ROW_WORDS];
+    int ranges[3][2], n, w;
     if (!r->sector_ok) {
         n = link3_row_ranges(r, is, dc, ranges);
         mark_ranges(row, ranges, n);
         return;
     }
-    n = link3_row_candidates(r, is, dc, ranges);
-    if (n == 0 || (seen = view_from_elbow(r, is, dc, &v)) == 0)
-        return;
-    open_set(row, ranges, n, open);
-    for (w = 0; w < QRT_ROW_WORDS; w++) {
-        uint64_t bits = open[w];
-        for (; bits; bits &= bits - 1U) {
-            int ie = (w << 6) + qrt_lowest_bit(bits);
-            if (node_meets(r, is, ie, seen, &v))
-                row[w] |= 1ULL << (ie & 63);
-        }
-    }
+    if (disc_row_nodes(r, is, dc, row, nodes))
+        for (w = 0; w < QRT_ROW_WORDS; w++)
+            row[w] |= nodes[w];
 }
 
 /* The nodes in ask (open nodes of row is that a cluster's ball blocks)
@@ -797,8 +813,7 @@ static inline int view_row(const struct qrt_raster *r,
                            int is, uint64_t ask[QRT_ROW_WORDS])
 {
     uint64_t *row = r->mask->rows[ia][is];
-    struct elbow_view ev;
-    int ranges[3][2], n, w, seen;
+    int ranges[3][2], n, w;
     uint64_t any = 0;
     if (!bit_set(v->rows, is))
         return 0;
@@ -813,20 +828,7 @@ static inline int view_row(const struct qrt_raster *r,
             any |= ask[w];
         return n > 0 && any != 0;
     }
-    n = link3_row_candidates(r, is, &v->disc, ranges);
-    if (n == 0 || (seen = view_from_elbow(r, is, &v->disc, &ev)) == 0)
-        return 0;
-    open_set(row, ranges, n, ask);
-    for (w = 0; w < QRT_ROW_WORDS; w++) {
-        uint64_t open = ask[w];
-        for (; open; open &= open - 1U) {
-            int ie = (w << 6) + qrt_lowest_bit(open);
-            if (!node_meets(r, is, ie, seen, &ev))
-                ask[w] &= ~(1ULL << (ie & 63));
-        }
-        any |= ask[w];
-    }
-    return any != 0;
+    return disc_row_nodes(r, is, &v->disc, row, ask);
 }
 
 static inline void view_members(const struct qrt_raster *r, int ia, int is,

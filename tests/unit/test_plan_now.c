@@ -316,6 +316,7 @@ static void fraction_built(void)
     /* the table holds the alpha lists and every view and disc this plan
      * makes */
     CHECK(pl.lazy_lists, "spheres: no alpha lists");
+    CHECK(pl.lazy_nodes_asked > 0, "spheres: no node asked alone");
     CHECK(pl.lazy_forgets == 0 && pl.lazy_unviewed_rows == 0 &&
               pl.lazy_unkept_discs == 0,
           "spheres: %ld forgets, %ld rows without views, %ld discs not kept",
