@@ -183,8 +183,12 @@ def main():
         # two short TPDOs sent now are counted, and the arm holds
         for frame in MALFORMED:
             subprocess.run(["cansend", "vcan0", frame], check=True)
+        # a status already on its way when the frames went out predates
+        # them: wait (status at 1 Hz) for one that has read them, then
+        # check that it counts exactly them and nothing else
         seen = len(statuses)
-        pump(3, lambda: len(statuses) > seen)
+        pump(5, lambda: len(statuses) > seen and
+             statuses[-1].can_frames_malformed >= len(MALFORMED))
         st = statuses[-1] if len(statuses) > seen else None
         check(joints and not joints[-1].moving and
               abs(oracle.wrap180(joints[-1].joints_deg[0] - goal[0])) < 0.05,
