@@ -37,6 +37,7 @@ if "--lcmtypes" in sys.argv:
 import conftest as cf  # noqa: E402
 import lcm  # noqa: E402
 import oracle  # noqa: E402
+from candump_capture import CANDUMP, drain, dropped  # noqa: E402
 
 failures = []
 # TPDO1 of nodes 1 and 2 with too few bytes (candump's spelling)
@@ -78,7 +79,7 @@ def main():
                    capture_output=True)
     url = "udpm://239.255.76.67:7777?ttl=0&recv_buf_size=4194304"
     capture = os.path.join(args.out, "daemon_can.candump")
-    dump = subprocess.Popen(["stdbuf", "-oL", "candump", "-L", "vcan0"], stdout=open(capture, "w"))
+    dump = subprocess.Popen(CANDUMP, stdout=open(capture, "w"))
     for _ in range(100):  # candump listening before the drives start
         subprocess.run(["cansend", "vcan0", "080#"], check=False)
         time.sleep(0.1)
@@ -211,18 +212,14 @@ def main():
             daemon.kill()
         sim.terminate()
         sim.wait(10)
-        # candump runs behind on a busy VM: a marker SYNC, written last
-        subprocess.run(["cansend", "vcan0", "080#"], check=False)
-        end = time.time() + 20
-        while time.time() < end:
-            with open(capture) as f:
-                lines = f.read().splitlines()
-            if lines and lines[-1].endswith("080#"):
-                break
-            time.sleep(0.1)
+        drained = drain(capture)
         dump.terminate()
         dump.wait(10)
     check(daemon.returncode == 0, f"clean shutdown (exit {daemon.returncode})")
+    check(drained, "candump caught up with the bus (the marker SYNC sent "
+          "last is captured)")
+    lost = dropped(capture)
+    check(lost == 0, f"candump lost {lost} frames")
     # the capture is complete only now (candump runs behind on a busy VM):
     # each blocking scan against the first quick-stop frame after it
     qs = quick_stops(capture)

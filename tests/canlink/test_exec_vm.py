@@ -32,6 +32,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, os.path.join(REPO, "tools"))
 import oracle  # noqa: E402
+from candump_capture import CANDUMP, drain, dropped  # noqa: E402
 
 SERVO_ERROR = 5  # counts = 0.005 deg at 1000 counts/deg
 failures = []
@@ -53,7 +54,7 @@ class Bus:
     def __init__(self, args, name, sim_extra):
         self.args, self.name = args, name
         self.capture = os.path.join(args.out, name + ".candump")
-        self.dump = subprocess.Popen(["stdbuf", "-oL", "candump", "-L", "vcan0"],
+        self.dump = subprocess.Popen(CANDUMP,
                                      stdout=open(self.capture, "w"))
         # candump must be listening before anything happens on the bus: a
         # SYNC (no drive is up yet to answer it) until one is captured
@@ -73,26 +74,15 @@ class Bus:
     def close(self):
         self.sim.terminate()
         self.sim.wait(10)
-        drain(self.capture)
+        check(drain(self.capture), f"{self.name}: candump caught up with the "
+              "bus (the marker SYNC sent last is captured)")
+        lost = dropped(self.capture)
+        check(lost == 0, f"{self.name}: candump lost {lost} frames")
         self.dump.terminate()
         try:
             self.dump.wait(10)
         except subprocess.TimeoutExpired:
             self.dump.kill()
-
-
-def drain(capture, limit=20.0):
-    """candump runs behind on a busy VM: put a marker SYNC on the bus and
-    wait until it is written, so that nothing before it is lost when candump
-    is stopped."""
-    subprocess.run(["cansend", "vcan0", "080#"], check=False)
-    end = time.time() + limit
-    while time.time() < end:
-        with open(capture) as f:
-            lines = f.read().splitlines()
-        if lines and lines[-1].endswith("080#"):
-            return
-        time.sleep(0.1)
 
 
 def plan(args, scene, out):
