@@ -138,6 +138,27 @@ struct qrt_lazy_clusters {
                              sizeof(struct qrt_heap_entry) - 1) /              \
                             sizeof(struct qrt_heap_entry)))
 
+/* The nodes nearest the goal, with their exact cost to it, found by a
+ * short Dijkstra from the goal before A* starts (perimeter search): A*'s
+ * estimate of a node outside them is the least octile distance to one of
+ * their rim nodes plus that node's cost, which knows how the goal must be
+ * entered (the paper's 10-sphere goal sits in a gap between spheres). */
+#ifndef QRT_GOAL_REGION_NODES
+#define QRT_GOAL_REGION_NODES 12
+#endif
+struct qrt_goal_region {
+    int settled, rim; /* entries used below */
+    int used; /* whether A* took its estimate (it said more at a seed) */
+    int32_t node[QRT_GOAL_REGION_NODES]; /* every node settled */
+    float cost[QRT_GOAL_REGION_NODES];   /* its exact cost to the goal */
+    /* the settled nodes with a free neighbour outside the region (every
+     * path from outside enters through one): lattice coordinates and cost
+     * in grid steps, in columns that A* reads whole (a rim shorter than
+     * the table is padded with infinite costs) */
+    float rim_a[QRT_GOAL_REGION_NODES], rim_s[QRT_GOAL_REGION_NODES],
+        rim_e[QRT_GOAL_REGION_NODES], rim_steps[QRT_GOAL_REGION_NODES];
+};
+
 struct qrt_raster; /* internal: the conversion's tables */
 
 struct qrt_planner {
@@ -168,6 +189,7 @@ struct qrt_planner {
     int32_t heap_pos[QRT_MAX_NODES];
     uint64_t search_seen[(QRT_MAX_NODES + 63) / 64];
     uint8_t parent_dir[QRT_MAX_NODES];
+    struct qrt_goal_region goal_region; /* the last A* search's */
     /* while qrt_planner_plan_now runs: rows are built as they are read */
     int lazy;
     /* the kept clusters and the rows_ready rows are still those of the

@@ -133,18 +133,81 @@ struct estimate {
     int active;
     int target[3];
     double slack; /* how far a goal candidate may lie from target */
+    /* when set: the least octile distance to its rim plus the rim node's
+     * cost (perimeter search), instead of the distance to target */
+    const struct qrt_goal_region *region;
 };
 
+static double octile_to(const struct qrt_lattice *lat, const int ijk[3], int a,
+                        int s, int e)
+{
+    return lat->grid_deg * octile(axis_gap(lat, 0, ijk[0], a),
+                                  axis_gap(lat, 1, ijk[1], s),
+                                  axis_gap(lat, 2, ijk[2], e));
+}
+
+/* The goal region's estimate of node (at ijk), in degrees: admissible,
+ * because a path from outside the region enters it at a rim node, whose
+ * cost is exact, and consistent, because each term changes by at most the
+ * octile step and a settled node's own cost is exact. HUGE_VAL where no
+ * path can reach the goal (outside a region without a rim: the goal's
+ * whole component was settled). In floats over the whole table, without
+ * branches, so that the compiler may use vector instructions; the rounding
+ * (under 1e-5 steps) is far inside the estimate's slack. */
+static double region_estimate(const struct qrt_goal_region *g,
+                              const struct qrt_lattice *lat, const int ijk[3],
+                              long node)
+{
+    /* octile = hi + (sqrt 2 - 1) mid + (sqrt 3 - sqrt 2) lo */
+    const float k_mid = 0.41421356f, k_lo = 0.31783725f;
+    const float a = (float)ijk[0], s = (float)ijk[1], e = (float)ijk[2];
+    const float turn = lat->alpha_wraps ? (float)lat->n[0] : 1e9f;
+    float terms[QRT_GOAL_REGION_NODES], h;
+    int i;
+    for (i = 0; i < QRT_GOAL_REGION_NODES; i++) {
+        float da = fabsf(a - g->rim_a[i]), ds = fabsf(s - g->rim_s[i]);
+        float de = fabsf(e - g->rim_e[i]), back = turn - da, lo, hi;
+        da = back < da ? back : da;
+        lo = da < ds ? da : ds;
+        lo = lo < de ? lo : de;
+        hi = da > ds ? da : ds;
+        hi = hi > de ? hi : de;
+        terms[i] =
+            hi + k_mid * (da + ds + de - lo - hi) + k_lo * lo + g->rim_steps[i];
+    }
+    h = terms[0];
+    for (i = 1; i < QRT_GOAL_REGION_NODES; i++)
+        h = terms[i] < h ? terms[i] : h;
+    if (h >= HUGE_VALF)
+        h = HUGE_VALF;
+    for (i = 0; i < g->settled; i++) {
+        if (g->node[i] == (int32_t)node) {
+            float exact = g->cost[i] / (float)lat->grid_deg;
+            h = exact < h ? exact : h;
+            break;
+        }
+    }
+    return h >= HUGE_VALF ? HUGE_VAL : (double)h * lat->grid_deg;
+}
+
+double qrt_goal_region_estimate(const struct qrt_planner *pl, const int ijk[3])
+{
+    return region_estimate(&pl->goal_region, &pl->mask.lat, ijk,
+                           qrt_lattice_index(&pl->mask.lat, ijk));
+}
+
 static double estimate_at(const struct estimate *est,
-                          const struct qrt_lattice *lat, const int ijk[3])
+                          const struct qrt_lattice *lat, const int ijk[3],
+                          long node)
 {
     double h;
     if (!est->active)
         return 0.0;
-    h = lat->grid_deg * octile(axis_gap(lat, 0, ijk[0], est->target[0]),
-                               axis_gap(lat, 1, ijk[1], est->target[1]),
-                               axis_gap(lat, 2, ijk[2], est->target[2])) -
-        est->slack;
+    if (est->region)
+        h = region_estimate(est->region, lat, ijk, node);
+    else
+        h = octile_to(lat, ijk, est->target[0], est->target[1], est->target[2]);
+    h -= est->slack;
     return h > 0.0 ? h : 0.0;
 }
 
@@ -154,15 +217,14 @@ static void init_estimate(struct estimate *est, const struct qrt_lattice *lat,
     int i, c[3];
     est->active = use_astar && goals->count > 0;
     est->slack = 0.0;
+    est->region = NULL;
     if (!est->active)
         return;
     qrt_lattice_coords(lat, goals->node[0], est->target);
     for (i = 1; i < goals->count; i++) {
         double gap;
         qrt_lattice_coords(lat, goals->node[i], c);
-        gap = lat->grid_deg * octile(axis_gap(lat, 0, c[0], est->target[0]),
-                                     axis_gap(lat, 1, c[1], est->target[1]),
-                                     axis_gap(lat, 2, c[2], est->target[2]));
+        gap = octile_to(lat, c, est->target[0], est->target[1], est->target[2]);
         if (gap > est->slack)
             est->slack = gap;
     }
@@ -198,56 +260,67 @@ static long neighbour(const struct qrt_lattice *lat, const int ijk[3],
     return qrt_lattice_index(lat, out);
 }
 
-void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
-                const struct qrt_ends *goals, int use_astar,
-                struct qrt_search_result *res)
-{
-    const struct qrt_lattice *lat = &pl->mask.lat;
-    long n_nodes = qrt_lattice_node_count(lat), size = 0, i;
-    float dir_cost[26];
-    double best = HUGE_VAL;
-    struct estimate est;
-    /* small types: this frame lies under every row build (stack budget) */
+/* The lattice's 26 moves: offsets, index deltas (valid off every face)
+ * and costs. Small types: the search's frame lies under every row build
+ * (stack budget). */
+struct moves {
+    float cost[26];
     int32_t delta[26];
-    signed char offsets[26][3];
-    int d, inside;
+    signed char offset[26][3];
+};
 
+static void init_moves(const struct qrt_lattice *lat, struct moves *mv)
+{
+    int d;
     for (d = 0; d < 26; d++) {
         int off[3], moved, j;
         qrt_search_direction(d, off);
         for (j = 0; j < 3; j++)
-            offsets[d][j] = (signed char)off[j];
+            mv->offset[d][j] = (signed char)off[j];
         moved = (off[0] != 0) + (off[1] != 0) + (off[2] != 0);
-        dir_cost[d] = (float)(lat->grid_deg * sqrt((double)moved));
-        delta[d] =
+        mv->cost[d] = (float)(lat->grid_deg * sqrt((double)moved));
+        mv->delta[d] =
             (int32_t)(((long)off[0] * lat->n[1] + off[1]) * lat->n[2] + off[2]);
     }
-    if (!pl->lazy)
-        pl->lazy_kept = 0; /* the heap may use the whole array */
-    init_estimate(&est, lat, goals, use_astar);
+}
+
+/* One best-first search from seeds. With goals, it ends when nothing left
+ * can beat the best goal reached (res); with region instead, it records the
+ * nodes it settles there and ends when the region is full (a Dijkstra from
+ * the goal, the graph being undirected). */
+static void search_from(struct qrt_planner *pl, const struct moves *mv,
+                        const struct qrt_ends *seeds,
+                        const struct qrt_ends *goals,
+                        const struct estimate *est,
+                        struct qrt_goal_region *region,
+                        struct qrt_search_result *res)
+{
+    const struct qrt_lattice *lat = &pl->mask.lat;
+    long n_nodes = qrt_lattice_node_count(lat), size = 0, i;
+    double best = HUGE_VAL;
+    int inside;
+
     for (i = 0; i < (n_nodes + 63) / 64; i++)
         pl->search_seen[i] = 0;
-    res->found = 0;
-    res->goal_node = -1;
-    res->cost = HUGE_VAL;
-    res->expanded = 0;
-
     for (i = 0; i < seeds->count; i++) {
         long node = seeds->node[i];
         int ijk[3];
+        double key;
         qrt_lattice_coords(lat, node, ijk);
         if (place_of(pl, node) >= 0 && pl->search.dist[node] <= seeds->cost[i])
             continue;
+        key = seeds->cost[i] + estimate_at(est, lat, ijk, node);
+        if (key == HUGE_VAL)
+            continue; /* cannot reach the goal */
         pl->search.dist[node] = (float)seeds->cost[i];
         pl->parent_dir[node] = QRT_NO_PARENT;
-        push_or_lower(pl, &size, node,
-                      (float)(seeds->cost[i] + estimate_at(&est, lat, ijk)));
+        push_or_lower(pl, &size, node, (float)key);
     }
 
     while (size > 0) {
         struct qrt_heap_entry top = pl->open.heap[0];
         long u = top.node;
-        int ijk[3], slot;
+        int ijk[3], slot, d;
         if ((double)top.key >= best)
             break; /* nothing left on the heap can beat the best goal */
         pl->heap_pos[u] = -2;
@@ -264,9 +337,13 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
                                     : qrt_lazy_node_blocked(pl, ijk))
             continue;
         res->expanded++;
-        slot = goal_slot(goals, u);
-        if (slot >= 0 &&
-            (double)pl->search.dist[u] + goals->cost[slot] < best) {
+        if (region) {
+            region->node[region->settled] = (int32_t)u;
+            region->cost[region->settled] = pl->search.dist[u];
+            if (++region->settled == QRT_GOAL_REGION_NODES)
+                break;
+        } else if (goals && (slot = goal_slot(goals, u)) >= 0 &&
+                   (double)pl->search.dist[u] + goals->cost[slot] < best) {
             best = (double)pl->search.dist[u] + goals->cost[slot];
             res->found = 1;
             res->goal_node = u;
@@ -281,12 +358,13 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
             int32_t place;
             long v;
             float g;
+            double key;
             if (inside) {
-                nb[0] = ijk[0] + offsets[d][0];
-                nb[1] = ijk[1] + offsets[d][1];
-                nb[2] = ijk[2] + offsets[d][2];
-                v = u + delta[d];
-            } else if ((v = neighbour(lat, ijk, offsets[d], nb)) < 0) {
+                nb[0] = ijk[0] + mv->offset[d][0];
+                nb[1] = ijk[1] + mv->offset[d][1];
+                nb[2] = ijk[2] + mv->offset[d][2];
+                v = u + mv->delta[d];
+            } else if ((v = neighbour(lat, ijk, mv->offset[d], nb)) < 0) {
                 continue;
             }
             place = place_of(pl, v);
@@ -296,15 +374,114 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
              * known yet is checked when taken */
             if (qrt_mask_bit(&pl->mask, nb))
                 continue;
-            g = pl->search.dist[u] + dir_cost[d];
+            g = pl->search.dist[u] + mv->cost[d];
             if (place >= 0 && pl->search.dist[v] <= g)
                 continue;
+            key = (double)g + estimate_at(est, lat, nb, v);
+            if (key == HUGE_VAL)
+                continue; /* cannot reach the goal */
             pl->search.dist[v] = g;
             pl->parent_dir[v] = (uint8_t)d;
-            push_or_lower(pl, &size, v,
-                          (float)((double)g + estimate_at(&est, lat, nb)));
+            push_or_lower(pl, &size, v, (float)key);
         }
     }
+}
+
+/* Is neighbour v (at nb) of a settled node outside the region and free?
+ * Settled nodes are closed and free; an unknown node is asked only when
+ * ask is set, so that the rim is a function of the mask alone, the same
+ * whether the mask is whole or asked as it is read. */
+static int free_outside(struct qrt_planner *pl, long v, const int nb[3],
+                        int ask)
+{
+    if (place_of(pl, v) == -2)
+        return 0; /* closed: settled, or known to be blocked */
+    if (qrt_lazy_known(pl, nb))
+        return !qrt_mask_bit(&pl->mask, nb);
+    return ask && !qrt_lazy_node_blocked(pl, nb);
+}
+
+/* The rim of the region just settled: its nodes with a free neighbour
+ * outside it. Read before the next search clears the seen bits. */
+static void find_rim(struct qrt_planner *pl, const struct moves *mv,
+                     struct qrt_goal_region *g)
+{
+    const struct qrt_lattice *lat = &pl->mask.lat;
+    int i, d, ask;
+    g->rim = 0;
+    for (i = 0; i < QRT_GOAL_REGION_NODES; i++) {
+        g->rim_a[i] = g->rim_s[i] = g->rim_e[i] = 0.0f;
+        g->rim_steps[i] = HUGE_VALF; /* padding: no term */
+    }
+    for (i = 0; i < g->settled; i++) {
+        int ijk[3], nb[3], on_rim = 0;
+        qrt_lattice_coords(lat, g->node[i], ijk);
+        /* the neighbours known first: they cost nothing to read */
+        for (ask = 0; ask < 2 && !on_rim; ask++) {
+            for (d = 0; d < 26 && !on_rim; d++) {
+                long v = neighbour(lat, ijk, mv->offset[d], nb);
+                on_rim = v >= 0 && free_outside(pl, v, nb, ask);
+            }
+        }
+        if (!on_rim)
+            continue;
+        g->rim_a[g->rim] = (float)ijk[0];
+        g->rim_s[g->rim] = (float)ijk[1];
+        g->rim_e[g->rim] = (float)ijk[2];
+        g->rim_steps[g->rim++] = g->cost[i] / (float)lat->grid_deg;
+    }
+}
+
+/* Does the region's estimate say more than the octile one at any seed? If
+ * not, it would cost more than it saves. */
+static int region_pays(const struct qrt_planner *pl, const struct estimate *est,
+                       const struct qrt_goal_region *g,
+                       const struct qrt_ends *seeds)
+{
+    const struct qrt_lattice *lat = &pl->mask.lat;
+    struct estimate with = *est;
+    int i, ijk[3];
+    with.region = g;
+    with.slack = 1e-3 * lat->grid_deg;
+    for (i = 0; i < seeds->count; i++) {
+        qrt_lattice_coords(lat, seeds->node[i], ijk);
+        if (estimate_at(&with, lat, ijk, seeds->node[i]) >
+            estimate_at(est, lat, ijk, seeds->node[i]) + with.slack)
+            return 1;
+    }
+    return 0;
+}
+
+void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
+                const struct qrt_ends *goals, int use_astar,
+                struct qrt_search_result *res)
+{
+    const struct qrt_lattice *lat = &pl->mask.lat;
+    struct qrt_goal_region *region = &pl->goal_region;
+    struct moves mv;
+    struct estimate est;
+
+    if (!pl->lazy)
+        pl->lazy_kept = 0; /* the heap may use the whole array */
+    init_moves(lat, &mv);
+    init_estimate(&est, lat, goals, use_astar);
+    res->found = 0;
+    res->goal_node = -1;
+    res->cost = HUGE_VAL;
+    res->expanded = 0;
+    region->settled = region->rim = region->used = 0;
+    if (est.active) {
+        struct estimate none = est;
+        none.active = 0;
+        search_from(pl, &mv, goals, NULL, &none, region, res);
+        find_rim(pl, &mv, region);
+        if (region_pays(pl, &est, region, seeds)) {
+            region->used = 1;
+            est.region = region;
+            est.slack = 1e-3 * lat->grid_deg;
+        }
+    }
+    search_from(pl, &mv, seeds, goals, &est, NULL, res);
 }
 
 long qrt_search_path(struct qrt_planner *pl, long goal_node)

@@ -28,6 +28,12 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
                 const struct qrt_ends *goals, int use_astar,
                 struct qrt_search_result *res);
 
+/* The goal region's estimate of node ijk after a search, in degrees (no
+ * slack taken off): the least octile distance to its rim plus the rim
+ * node's cost, or the node's own exact cost where it was settled; HUGE_VAL
+ * where the goal cannot be reached. For tests. */
+double qrt_goal_region_estimate(const struct qrt_planner *pl, const int ijk[3]);
+
 /* Write the node path ending at goal_node (seed first) into
  * pl->open.heap[i].node; returns its length. */
 long qrt_search_path(struct qrt_planner *pl, long goal_node);
