@@ -731,15 +731,8 @@ void qrt_raster_cluster_prepare(const struct qrt_raster *r,
                        g);
         return;
     }
-    for (j = 0; j < m; j++) {
-        double d2 = 0.0;
-        for (k = 0; k < 3; k++) {
-            double e = pts[members[j]][k] - g->c[k];
-            d2 += e * e;
-        }
-        if (d2 > ball)
-            ball = d2;
-    }
+    for (k = 0; k < 3; k++)
+        ball += 0.25 * (hi[k] - lo[k]) * (hi[k] - lo[k]);
     g->ball = sqrt(ball) * (1.0 + 1e-12) + 1e-12;
     set_alpha_bits(r, g->rho, atan2(g->c[1], g->c[0]),
                    max_plane_radius(r) + g->ball, g);
