@@ -58,6 +58,19 @@ static void set_row_range(uint64_t *row, int a, int b)
     row[wb] |= last;
 }
 
+/* i modulo n, in [0, n). The callers' angles lie within a turn or so of
+ * the axis, so one add or subtract nearly always does it: a 64-bit
+ * division is tens of cycles, and this runs for every point near link 1
+ * and every cluster's alpha window. */
+static long wrap_index(long i, long n)
+{
+    if (i < 0)
+        i += n;
+    else if (i >= n)
+        i -= n;
+    return i >= 0 && i < n ? i : ((i % n) + n) % n;
+}
+
 /* Index ranges [out[i][0], out[i][1]] of the nodes of axis ax whose angle
  * lies within half of centre, modulo 2 pi. Returns the count (at most 3):
  * axes that do not wrap span at most 2 pi (qrt_arm_validate). */
@@ -83,8 +96,8 @@ static int angle_ranges(const struct qrt_axis *ax, double centre, double half,
             out[0][1] = ax->n - 1;
             return 1;
         }
-        ma = ((a % ax->n) + ax->n) % ax->n;
-        mb = ((b % ax->n) + ax->n) % ax->n;
+        ma = wrap_index(a, ax->n);
+        mb = wrap_index(b, ax->n);
         if (ma <= mb) {
             out[0][0] = (int)ma;
             out[0][1] = (int)mb;
