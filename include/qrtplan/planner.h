@@ -146,6 +146,9 @@ struct qrt_lazy_clusters {
 #ifndef QRT_GOAL_REGION_NODES
 #define QRT_GOAL_REGION_NODES 12
 #endif
+#if QRT_GOAL_REGION_NODES < 4 || QRT_GOAL_REGION_NODES % 4 != 0
+#error "QRT_GOAL_REGION_NODES must be a multiple of 4 (A* reads it in lanes)"
+#endif
 struct qrt_goal_region {
     int settled, rim; /* entries used below */
     int used; /* whether A* took its estimate (it said more at a seed) */

@@ -162,8 +162,8 @@ static double region_estimate(const struct qrt_goal_region *g,
     const float k_mid = 0.41421356f, k_lo = 0.31783725f;
     const float a = (float)ijk[0], s = (float)ijk[1], e = (float)ijk[2];
     const float turn = lat->alpha_wraps ? (float)lat->n[0] : 1e9f;
-    float terms[QRT_GOAL_REGION_NODES], h;
-    int i;
+    float terms[QRT_GOAL_REGION_NODES], lane[4], h;
+    int i, j;
     for (i = 0; i < QRT_GOAL_REGION_NODES; i++) {
         float da = fabsf(a - g->rim_a[i]), ds = fabsf(s - g->rim_s[i]);
         float de = fabsf(e - g->rim_e[i]), back = turn - da, lo, hi;
@@ -175,11 +175,16 @@ static double region_estimate(const struct qrt_goal_region *g,
         terms[i] =
             hi + k_mid * (da + ds + de - lo - hi) + k_lo * lo + g->rim_steps[i];
     }
-    h = terms[0];
-    for (i = 1; i < QRT_GOAL_REGION_NODES; i++)
-        h = terms[i] < h ? terms[i] : h;
-    if (h >= HUGE_VALF)
-        h = HUGE_VALF;
+    /* the least term: four lanes first (vector minimums), then across them
+     * (a short chain, where one running minimum would wait on each) */
+    for (j = 0; j < 4; j++)
+        lane[j] = terms[j];
+    for (i = 4; i < QRT_GOAL_REGION_NODES; i += 4)
+        for (j = 0; j < 4; j++)
+            lane[j] = terms[i + j] < lane[j] ? terms[i + j] : lane[j];
+    h = lane[0] < lane[1] ? lane[0] : lane[1];
+    h = lane[2] < h ? lane[2] : h;
+    h = lane[3] < h ? lane[3] : h;
     for (i = 0; i < g->settled; i++) {
         if (g->node[i] == (int32_t)node) {
             float exact = g->cost[i] / (float)lat->grid_deg;
