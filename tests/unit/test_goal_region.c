@@ -14,25 +14,12 @@
 #include "../../src/core/search.h"
 #include "check.h"
 #include "qrtplan/qrtplan.h"
+#include "ref_lattice.h"
 
 static struct qrt_planner pl;
 static double to_goal[QRT_MAX_NODES];
 static long heap_node[QRT_MAX_NODES], heap_at[QRT_MAX_NODES];
 static long heap_len;
-
-static long wrap(const struct qrt_lattice *lat, int a, int s, int e)
-{
-    int ijk[3];
-    if (lat->alpha_wraps)
-        a = (a + lat->n[0]) % lat->n[0];
-    if (a < 0 || a >= lat->n[0] || s < 0 || s >= lat->n[1] || e < 0 ||
-        e >= lat->n[2])
-        return -1;
-    ijk[0] = a;
-    ijk[1] = s;
-    ijk[2] = e;
-    return qrt_lattice_index(lat, ijk);
-}
 
 static void heap_swap(long i, long j)
 {
@@ -90,7 +77,7 @@ static void true_costs(const struct qrt_mask *m, long goal)
         qrt_lattice_coords(lat, u, c);
         for (d = 0; d < 27; d++) {
             int da = d / 9 - 1, ds = (d / 3) % 3 - 1, de = d % 3 - 1;
-            long v = wrap(lat, c[0] + da, c[1] + ds, c[2] + de);
+            long v = wrap_index(lat, c[0] + da, c[1] + ds, c[2] + de);
             double w;
             if (d == 13 || v < 0 || qrt_mask_blocked_index(m, v) ||
                 heap_at[v] == -2)
@@ -247,7 +234,7 @@ int main(void)
                 bad_inf++;
             for (d = 0; d < 27 && h < HUGE_VAL; d++) {
                 int da = d / 9 - 1, ds = (d / 3) % 3 - 1, de = d % 3 - 1, o[3];
-                long v = wrap(lat, c[0] + da, c[1] + ds, c[2] + de);
+                long v = wrap_index(lat, c[0] + da, c[1] + ds, c[2] + de);
                 double w;
                 if (d == 13 || v < 0 || qrt_mask_blocked_index(&pl.mask, v))
                     continue;

@@ -2,24 +2,11 @@
  * Dijkstra (array scan, no heap) written here, on random masks. */
 #include "check.h"
 #include "qrtplan/qrtplan.h"
+#include "ref_lattice.h"
 
 static struct qrt_planner pl;
 static double ref_dist[QRT_MAX_NODES];
 static unsigned char ref_done[QRT_MAX_NODES];
-
-static long wrap_index(const struct qrt_lattice *lat, int a, int s, int e)
-{
-    int ijk[3];
-    if (lat->alpha_wraps)
-        a = (a + lat->n[0]) % lat->n[0];
-    if (a < 0 || a >= lat->n[0] || s < 0 || s >= lat->n[1] || e < 0 ||
-        e >= lat->n[2])
-        return -1;
-    ijk[0] = a;
-    ijk[1] = s;
-    ijk[2] = e;
-    return qrt_lattice_index(lat, ijk);
-}
 
 static double reference_cost(const struct qrt_mask *m, long from, long to)
 {
