@@ -9,7 +9,7 @@
 static long table_size(long n)
 {
     long h = 16;
-    while (h < 2 * n)
+    while (h < n / 4)
         h *= 2;
     return h;
 }
