@@ -23,7 +23,9 @@ struct qrt_search_result {
 };
 
 /* Search from the seeds to any goal on pl->mask, leaving the parent of
- * every reached node in pl->parent_dir. */
+ * every reached node in pl->parent_dir. With use_astar, a Dijkstra from the
+ * goals first settles pl->goal_region, whose estimate A* takes where it
+ * says more than octile at a seed; res->expanded counts both searches. */
 void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
                 const struct qrt_ends *goals, int use_astar,
                 struct qrt_search_result *res);
