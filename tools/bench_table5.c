@@ -281,10 +281,11 @@ int main(int argc, char **argv)
     }
     if (single_n > 0) {
         run_cell(single_n, single_k, repeats, &c);
-        printf("%d x %d: %s, median %.3f ms (nodes asked as read); whole mask "
-               "%.3f ms (convert %.3f ms, search %.3f ms); %ld nodes expanded\n",
-               single_n, single_k, c.status, c.median_ms, c.whole_ms,
-               c.convert_ms, c.search_ms, c.expanded);
+        printf(
+            "%d x %d: %s, median %.3f ms (nodes asked as read); whole mask "
+            "%.3f ms (convert %.3f ms, search %.3f ms); %ld nodes expanded\n",
+            single_n, single_k, c.status, c.median_ms, c.whole_ms, c.convert_ms,
+            c.search_ms, c.expanded);
         return 0;
     }
     if (csv_path && !(csv = fopen(csv_path, "w"))) {

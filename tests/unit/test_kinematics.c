@@ -132,7 +132,8 @@ static void test_paper_equations(void)
             }
         }
     }
-    CHECK(checked > test_count(500), "only %d paper configurations checked", checked);
+    CHECK(checked > test_count(500), "only %d paper configurations checked",
+          checked);
 }
 
 int main(void)
