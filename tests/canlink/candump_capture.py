@@ -1,5 +1,7 @@
 """A candump capture of vcan0 that the CAN VM tests can trust.
 
+start() begins the capture and returns once candump is listening (a SYNC
+it has captured), so that nothing the drives and the master do is missed.
 candump runs behind on a busy VM. Three things keep its capture whole:
   * a 4 MiB socket receive buffer (-r; root in the VM may exceed rmem_max),
     and -d, which makes candump write a DROPCOUNT line should the kernel
@@ -18,6 +20,20 @@ import time
 
 CANDUMP = ["stdbuf", "-oL", "candump", "-L", "-D", "-d", "-r", "4194304",
            "vcan0"]
+
+
+def start(capture):
+    """candump writing vcan0 to the file capture, listening when this
+    returns: a SYNC (no drive is up yet to answer it) until one is in the
+    file. Returns the process."""
+    dump = subprocess.Popen(CANDUMP, stdout=open(capture, "w"))
+    for _ in range(100):
+        subprocess.run(["cansend", "vcan0", "080#"], check=False)
+        time.sleep(0.1)
+        with open(capture) as f:
+            if "080#" in f.read():
+                break
+    return dump
 
 
 def drain(capture, limit=20.0):

@@ -37,7 +37,7 @@ if "--lcmtypes" in sys.argv:
 import conftest as cf  # noqa: E402
 import lcm  # noqa: E402
 import oracle  # noqa: E402
-from candump_capture import CANDUMP, drain, dropped  # noqa: E402
+from candump_capture import drain, dropped, start  # noqa: E402
 
 failures = []
 # TPDO1 of nodes 1 and 2 with too few bytes (candump's spelling)
@@ -79,13 +79,7 @@ def main():
                    capture_output=True)
     url = "udpm://239.255.76.67:7777?ttl=0&recv_buf_size=4194304"
     capture = os.path.join(args.out, "daemon_can.candump")
-    dump = subprocess.Popen(CANDUMP, stdout=open(capture, "w"))
-    for _ in range(100):  # candump listening before the drives start
-        subprocess.run(["cansend", "vcan0", "080#"], check=False)
-        time.sleep(0.1)
-        with open(capture) as f:
-            if "080#" in f.read():
-                break
+    dump = start(capture)  # listening before the drives start
     sim = subprocess.Popen([args.servo_sim, "--iface", "vcan0", "--start-deg",
                             "-100,0,0", "--servo-error", "5", "--watchdog-ms",
                             "500"], stderr=open(os.path.join(args.out, "sim.log"), "w"))

@@ -32,7 +32,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, os.path.join(REPO, "tools"))
 import oracle  # noqa: E402
-from candump_capture import CANDUMP, drain, dropped  # noqa: E402
+from candump_capture import drain, dropped, start  # noqa: E402
 
 SERVO_ERROR = 5  # counts = 0.005 deg at 1000 counts/deg
 failures = []
@@ -54,16 +54,8 @@ class Bus:
     def __init__(self, args, name, sim_extra):
         self.args, self.name = args, name
         self.capture = os.path.join(args.out, name + ".candump")
-        self.dump = subprocess.Popen(CANDUMP,
-                                     stdout=open(self.capture, "w"))
-        # candump must be listening before anything happens on the bus: a
-        # SYNC (no drive is up yet to answer it) until one is captured
-        for _ in range(100):
-            subprocess.run(["cansend", "vcan0", "080#"], check=False)
-            time.sleep(0.1)
-            with open(self.capture) as f:
-                if "080#" in f.read():
-                    break
+        # candump listening before anything happens on the bus
+        self.dump = start(self.capture)
         log = open(os.path.join(args.out, name + ".servo_sim.log"), "w")
         cmd = [args.servo_sim, "--iface", "vcan0", "--servo-error",
                str(SERVO_ERROR), "--watchdog-ms", "400", "--verbose"] + sim_extra
