@@ -216,6 +216,13 @@ static double estimate_at(const struct estimate *est,
     return h > 0.0 ? h : 0.0;
 }
 
+/* Keys are floats: an estimate stays this far below the true remaining
+ * cost, so that rounding never makes it overestimate. */
+static double key_slack(const struct qrt_lattice *lat)
+{
+    return 1e-3 * lat->grid_deg;
+}
+
 static void init_estimate(struct estimate *est, const struct qrt_lattice *lat,
                           const struct qrt_ends *goals, int use_astar)
 {
@@ -233,8 +240,7 @@ static void init_estimate(struct estimate *est, const struct qrt_lattice *lat,
         if (gap > est->slack)
             est->slack = gap;
     }
-    /* float keys: stay a hair below the true remaining cost */
-    est->slack += 1e-3 * lat->grid_deg;
+    est->slack += key_slack(lat);
 }
 
 static int goal_slot(const struct qrt_ends *goals, long node)
@@ -447,7 +453,7 @@ static int region_pays(const struct qrt_planner *pl, const struct estimate *est,
     struct estimate with = *est;
     int i, ijk[3];
     with.region = g;
-    with.slack = 1e-3 * lat->grid_deg;
+    with.slack = key_slack(lat);
     for (i = 0; i < seeds->count; i++) {
         qrt_lattice_coords(lat, seeds->node[i], ijk);
         if (estimate_at(&with, lat, ijk, seeds->node[i]) >
@@ -483,7 +489,7 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
         if (region_pays(pl, &est, region, seeds)) {
             region->used = 1;
             est.region = region;
-            est.slack = 1e-3 * lat->grid_deg;
+            est.slack = key_slack(lat);
         }
     }
     search_from(pl, &mv, seeds, goals, &est, NULL, res);

@@ -97,13 +97,12 @@ static void true_costs(const struct qrt_mask *m, long goal)
 
 static void set_blocked(struct qrt_mask *m, int a, int s, int e)
 {
-    const struct qrt_lattice *lat = &m->lat;
-    if (lat->alpha_wraps)
-        a = (a + lat->n[0]) % lat->n[0];
-    if (a < 0 || a >= lat->n[0] || s < 0 || s >= lat->n[1] || e < 0 ||
-        e >= lat->n[2])
+    long v = wrap_index(&m->lat, a, s, e);
+    int c[3];
+    if (v < 0)
         return;
-    m->rows[a][s][e >> 6] |= 1ULL << (e & 63);
+    qrt_lattice_coords(&m->lat, v, c);
+    m->rows[c[0]][c[1]][c[2] >> 6] |= 1ULL << (c[2] & 63);
 }
 
 static void clear_node(struct qrt_mask *m, const int c[3])
