@@ -83,7 +83,10 @@ def main():
     sim = subprocess.Popen([args.servo_sim, "--iface", "vcan0", "--start-deg",
                             "-100,0,0", "--servo-error", "5", "--watchdog-ms",
                             "500"], stderr=open(os.path.join(args.out, "sim.log"), "w"))
-    daemon_log = open(os.path.join(args.out, "qrtpland.log"), "w+")
+    # emptied, then appended to: the log is read while the daemon runs,
+    # and its writes must not land where that read's seek left the offset
+    open(os.path.join(args.out, "qrtpland.log"), "w").close()
+    daemon_log = open(os.path.join(args.out, "qrtpland.log"), "a+")
     daemon = subprocess.Popen([args.daemon, "--lcm-url", url, "--can", "vcan0",
                                "--speed", "30", "--accel", "60",
                                # emulated CPU, busy host: heartbeats come late

@@ -108,7 +108,10 @@ class Daemon:
     def __init__(self, tmp_path, *args, url_options=RECV_BUF):
         self.port = next(_ports)
         self.url = f"udpm://239.255.76.67:{self.port}?ttl=0{url_options}"
-        self.log = open(tmp_path / f"qrtpland-{self.port}.log", "w+")
+        # appending: the daemon shares this file description, so with "w+"
+        # its writes went where text()'s seek(0) had left the offset and
+        # overwrote the log's first line
+        self.log = open(tmp_path / f"qrtpland-{self.port}.log", "a+")
         env = dict(os.environ)
         if "ASAN_OPTIONS" in env:
             # ASan keeps freed memory in quarantine (256 MiB): without it the

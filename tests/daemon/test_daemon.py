@@ -225,30 +225,50 @@ def test_fresh_sensor_ids_cannot_grow_the_picture(daemon):
     d, c = daemon()
     c.pump(0.5)
     rss0 = d.rss_kib()
-    # 1,100 sent, 1,000 awaited: loopback UDP may lose a few in a burst.
-    # Sent in bunches of 50 (125 KB), well inside the daemon's receive
-    # buffer, and every 200 no more than 200 ahead of what the daemon's
-    # (1 Hz) status says it has read: one 2.7 MB burst once lost 114 while a
-    # busy machine kept the daemon from reading, and bunches paced only by
-    # time lost 107 in CI while a build ran beside it.
-    for i in range(1100):
-        c.publish("QRT_SCAN", scan_from_points([[0.5, 0.5, 0.5]] * 200,
-                                               sensor=f"x{i}"))
-        if i % 50 == 49:
-            time.sleep(0.02)
-        if i % 200 == 199:
-            c.wait_status(lambda s, sent=i + 1: s.scans_received +
-                          s.scans_rejected >= sent - 200, timeout=3.0)
-    st = c.wait_status(lambda s: s.scans_received + s.scans_rejected >= 1000)
+    udp_drops0 = udp_receive_buffer_errors()
+    # Loopback UDP may lose scans on a loaded machine (CI lost 114, 107 and
+    # 103 of 1,100 in three open-loop versions of this test), so the test
+    # closes the loop on the daemon's own log, written as each scan is
+    # refused: bunches of 50 go out while at most 100 are unread, and fresh
+    # ids keep coming until 1,000 have reached the daemon (3,000 at most).
+    def refused():
+        return d.text().count("beyond the 32 sensors")
+
+    sent = 0
+    while sent < 3000 and refused() + 32 < 1000:
+        for _ in range(50):
+            c.publish("QRT_SCAN", scan_from_points([[0.5, 0.5, 0.5]] * 200,
+                                                   sensor=f"x{sent}"))
+            sent += 1
+        end = time.time() + 3.0
+        while refused() + 32 < sent - 100 and time.time() < end:
+            time.sleep(0.01)
+    # settled: every scan read, or none more for a second (the rest lost)
+    arrived, still_since = refused() + 32, time.time()
+    while arrived < sent and time.time() - still_since < 1.0:
+        time.sleep(0.05)
+        if refused() + 32 != arrived:
+            arrived, still_since = refused() + 32, time.time()
+    assert arrived >= 1000, (
+        f"{arrived} of {sent} scans reached the daemon; the kernel counted "
+        f"{udp_receive_buffer_errors() - udp_drops0} UDP receive-buffer drops")
+    st = c.wait_status(lambda s: s.scans_received + s.scans_rejected >= arrived)
     assert st is not None, d.text()
-    assert st.scans_received == 32 and st.scans_rejected >= 1000 - 32, (
-        st.scans_received, st.scans_rejected)
+    assert (st.scans_received, st.scans_rejected) == (32, arrived - 32), (
+        st.scans_received, st.scans_rejected, arrived, sent)
     assert "beyond the 32 sensors" in st.last_error
-    assert "beyond the 32 sensors" in d.text()
     assert d.rss_kib() - rss0 < 20 * 1024
     c.publish("QRT_PLAN_REQUEST", request([90, 0, 0], start=[-90, 0, 0], request_id=5))
     p = c.wait_plan(lambda p: p.request_id == 5)
     assert p is not None and p.status == "ok" and p.points == 32 * 200, d.text()
+
+
+def udp_receive_buffer_errors():
+    """The kernel's count of UDP datagrams dropped for a full receive
+    buffer (all sockets): tells transport loss from a daemon fault."""
+    with open("/proc/net/snmp") as f:
+        rows = [line.split() for line in f if line.startswith("Udp:")]
+    return int(rows[1][rows[0].index("RcvbufErrors")])
 
 
 def test_clean_shutdown_on_sigterm(daemon):
