@@ -231,31 +231,34 @@ def test_fresh_sensor_ids_cannot_grow_the_picture(daemon):
     # closes the loop on the daemon's own log, written as each scan is
     # refused: bunches of 50 go out while at most 100 are unread, and fresh
     # ids keep coming until 1,000 have reached the daemon (3,000 at most).
-    def refused():
-        return d.text().count("beyond the 32 sensors")
+    def arrived():
+        return 32 + d.text().count("beyond the 32 sensors")
+
+    def read_up_to(sent):
+        """Waits until the daemon has read up to `sent` scans, or has read
+        none more for a second (the rest were lost); returns how many."""
+        last, since = arrived(), time.time()
+        while last < sent and time.time() - since < 1.0:
+            time.sleep(0.01)
+            if arrived() != last:
+                last, since = arrived(), time.time()
+        return last
 
     sent = 0
-    while sent < 3000 and refused() + 32 < 1000:
+    while sent < 3000 and arrived() < 1000:
         for _ in range(50):
             c.publish("QRT_SCAN", scan_from_points([[0.5, 0.5, 0.5]] * 200,
                                                    sensor=f"x{sent}"))
             sent += 1
-        end = time.time() + 3.0
-        while refused() + 32 < sent - 100 and time.time() < end:
-            time.sleep(0.01)
-    # settled: every scan read, or none more for a second (the rest lost)
-    arrived, still_since = refused() + 32, time.time()
-    while arrived < sent and time.time() - still_since < 1.0:
-        time.sleep(0.05)
-        if refused() + 32 != arrived:
-            arrived, still_since = refused() + 32, time.time()
-    assert arrived >= 1000, (
-        f"{arrived} of {sent} scans reached the daemon; the kernel counted "
+        read_up_to(sent - 100)
+    n_arrived = read_up_to(sent)
+    assert n_arrived >= 1000, (
+        f"{n_arrived} of {sent} scans reached the daemon; the kernel counted "
         f"{udp_receive_buffer_errors() - udp_drops0} UDP receive-buffer drops")
-    st = c.wait_status(lambda s: s.scans_received + s.scans_rejected >= arrived)
+    st = c.wait_status(lambda s: s.scans_received + s.scans_rejected >= n_arrived)
     assert st is not None, d.text()
-    assert (st.scans_received, st.scans_rejected) == (32, arrived - 32), (
-        st.scans_received, st.scans_rejected, arrived, sent)
+    assert (st.scans_received, st.scans_rejected) == (32, n_arrived - 32), (
+        st.scans_received, st.scans_rejected, n_arrived, sent)
     assert "beyond the 32 sensors" in st.last_error
     assert d.rss_kib() - rss0 < 20 * 1024
     c.publish("QRT_PLAN_REQUEST", request([90, 0, 0], start=[-90, 0, 0], request_id=5))
