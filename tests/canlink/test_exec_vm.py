@@ -165,10 +165,12 @@ def scenario_table4(args):
     moving = np.array([s == "moving" for s in states])
     check(moving.sum() > 50, f"{moving.sum()} poses traced while moving")
     dist = off_path(q[moving], wps)
-    # the drives take their set-points from three frames in a row, so one
-    # may start late: about a millisecond, 0.09 deg at 90 deg/s, on an idle
-    # machine (0.034 deg measured); the emulated CPU of the VM on a busy
-    # host stretches that (0.22 deg seen). The bound here is a sanity bound
+    # the drives take their set-points from three frames in a row; the
+    # simulator hands every frame already received to the drives before
+    # they move on, so none starts a tick late: 0.012-0.015 deg measured
+    # on an idle machine, 0.093 deg with three CPU hogs beside the VM
+    # (0.043-0.054 and 0.40 deg when a tick could fall between the three
+    # frames; 0.73 deg once in CI). The bound here is a sanity bound
     # (0.5 deg: 8 mm at full reach, inside the 10 mm margin); the
     # synchronisation itself is pinned down in tests/canmaster (0.05 deg),
     # and the oracle below checks what matters: no pose collides.
