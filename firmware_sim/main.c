@@ -277,7 +277,7 @@ int main(int argc, char **argv)
             }
             if (++drained == MAX_FRAMES_PER_TICK)
                 break;
-            rc = can.receive(can.ctx, &f, 0u) == 1 ? 1 : 0;
+            rc = can.receive(can.ctx, &f, 0u) == 1;
         }
         t = can.now_us(can.ctx);
         if (t < next_tick) {

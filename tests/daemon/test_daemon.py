@@ -240,8 +240,9 @@ def test_fresh_sensor_ids_cannot_grow_the_picture(daemon):
         last, since = arrived(), time.time()
         while last < sent and time.time() - since < 1.0:
             time.sleep(0.01)
-            if arrived() != last:
-                last, since = arrived(), time.time()
+            now_arrived = arrived()
+            if now_arrived != last:
+                last, since = now_arrived, time.time()
         return last
 
     sent = 0
