@@ -1,8 +1,8 @@
 /* Certified motions: every motion the mask walk or the conservative
  * advancement accepts is free when sampled finely with the reference arm,
  * across the alpha seam too; where the walk fails, the configuration it
- * names collides exactly when the reference arm says so. Uses the core's
- * internal motion.h. */
+ * names collides exactly when the reference arm says so; the clearance
+ * equals the reference arm's. Uses the core's internal motion.h. */
 #include "../../src/core/motion.h"
 #include "check.h"
 #include "qrtplan/qrtplan.h"
@@ -34,6 +34,78 @@ static double motion_clearance(const double a[3], const double b[3],
         worst = fmin(worst, ref_clearance(q, pts, n, radius));
     }
     return worst;
+}
+
+/* qrt_clearance_capped against the reference clearance: min(clearance,
+ * cap) where the arm is clear, <= 0 where it collides, on clouds whose
+ * points lie near one link or another among many far from the arm (the
+ * boxes that turn points away must never turn away one that counts). */
+static void check_clearance(void)
+{
+    enum { CLOUD = 300 };
+    static double cloud[3 * CLOUD];
+    static const double caps[4] = {1e30, 0.5, 0.05, 2e-7};
+    struct qrt_params prm;
+    double radius[3];
+    int trial, i, k, clear = 0, colliding = 0, capped = 0;
+    qrt_params_default(&prm);
+    for (k = 0; k < 3; k++)
+        radius[k] = prm.arm.link_radius_m[k] + prm.margin_m;
+    for (trial = 0; trial < test_count(300); trial++) {
+        double q[3], p[4][3], ref;
+        int link = trial % 3, near = trial % 4;
+        q[0] = test_uniform(-180, 180);
+        q[1] = test_uniform(-40, 180);
+        q[2] = test_uniform(-180, 140);
+        qrt_arm_fk(&prm.arm, q, p);
+        for (i = 0; i < CLOUD; i++) {
+            double x[3];
+            if (i < near) { /* near a point of one link */
+                double t = test_uniform(0, 1), spread = 0.05 + 0.15 * (i % 3);
+                for (k = 0; k < 3; k++)
+                    x[k] = p[link][k] + t * (p[link + 1][k] - p[link][k]) +
+                           test_uniform(-spread, spread);
+            } else {
+                double rho = test_uniform(0.0, 1.5),
+                       phi = test_uniform(-3.1, 3.1);
+                x[0] = rho * cos(phi);
+                x[1] = rho * sin(phi);
+                x[2] = test_uniform(-1.2, 1.2);
+            }
+            for (k = 0; k < 3; k++)
+                cloud[3 * i + k] = x[k];
+        }
+        qrt_planner_init(&pl, &prm);
+        qrt_planner_add_points(&pl, cloud, CLOUD);
+        CHECK(pl.points.voxel_m == 0.0, "cloud stored as given");
+        /* against the points the table holds (those within reach) */
+        for (i = 0; i < pl.points.count; i++)
+            for (k = 0; k < 3; k++)
+                cloud[3 * i + k] = pl.points.xyz[i][k];
+        ref = ref_clearance(q, cloud, pl.points.count, radius);
+        for (k = 0; k < 4; k++) {
+            double got =
+                qrt_clearance_capped(&prm.arm, radius, &pl.points, q, caps[k]);
+            if (ref <= 0.0) {
+                CHECK(got <= 0.0, "colliding arm: clearance %g (reference %g)",
+                      got, ref);
+            } else {
+                double want = ref < caps[k] ? ref : caps[k];
+                CHECK(fabs(got - want) < 1e-9,
+                      "trial %d cap %g: clearance %.12g, reference %.12g",
+                      trial, caps[k], got, want);
+                capped += ref > caps[k];
+            }
+        }
+        if (ref <= 0.0)
+            colliding++;
+        else
+            clear++;
+    }
+    printf("clearance: %d clear, %d colliding, %d capped answers\n", clear,
+           colliding, capped);
+    CHECK(clear >= test_count(300) / 5 && colliding >= test_count(300) / 5,
+          "both kinds of arm pose: %d clear, %d colliding", clear, colliding);
 }
 
 int main(void)
@@ -103,6 +175,7 @@ int main(void)
             }
         }
     }
+    check_clearance();
     printf("motions accepted: mask %d, exact %d\n", accepted_mask,
            accepted_exact);
     CHECK(accepted_mask > test_count(1000) && accepted_exact > test_count(200),
