@@ -6,7 +6,9 @@ scenes, a tunnel, a shelf and dense random clutter with tools/scenes.py),
 runs build/bin/bench_ompl on them (the two sides interleaved repetition by
 repetition in one process), checks every returned path with the independent
 oracle (tools/oracle.py, 0.1 degree sampling), and writes
-build/bench/ompl_compare.csv, ompl_summary.csv and ompl_compare.png.
+build/bench/ompl_compare.csv, ompl_summary.csv (per family),
+ompl_per_scene.csv (per scene, qrtplan against RRTConnect) and
+ompl_compare.png.
 
     .venv/bin/python tools/bench_compare.py [--repeats R] [--seeds N]
     .venv/bin/python tools/bench_compare.py --smoke      # a few seconds, for make test
@@ -194,11 +196,42 @@ def main():
             print(f"{fam}: {who} in median time to a path; median length "
                   f"{np.median(ours['len']):.0f} (qrtplan) vs "
                   f"{np.median(rrt['len']):.0f} deg (RRTConnect)")
+    per_scene(rows, family_of, made, os.path.join(args.out, "ompl_per_scene.csv"))
     if not args.smoke:
         plot(lines, fams, os.path.join(args.out, "ompl_compare.png"))
     for p in problems:
         print("FAIL", p)
     return 1 if problems else 0
+
+
+def per_scene(rows, family_of, made, path):
+    """A family's median can hide a scene where RRTConnect is ahead: print
+    and write each scene's medians (successful runs), and name those."""
+    times, lens = defaultdict(list), defaultdict(list)
+    for r in rows:
+        if r["success"] == "1" and r["planner"] in ("qrtplan", "RRTConnect"):
+            times[(r["scene"], r["planner"])].append(float(r["time_ms"]))
+            lens[(r["scene"], r["planner"])].append(float(r["length_deg"]))
+    behind = []
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["family", "scene", "qrtplan_median_ms", "rrtconnect_median_ms",
+                    "speedup", "qrtplan_length_deg", "rrtconnect_length_deg"])
+        print(f"{'scene':22} {'qrtplan ms':>10} {'RRTConnect ms':>13} {'speed-up':>8}")
+        for _, scene in made:
+            ours, rrt = times[(scene, "qrtplan")], times[(scene, "RRTConnect")]
+            if not ours or not rrt:
+                continue
+            ratio = float(np.median(rrt) / np.median(ours))
+            name = os.path.splitext(os.path.basename(scene))[0]
+            w.writerow([family_of[scene], name, np.median(ours), np.median(rrt), ratio,
+                        np.median(lens[(scene, "qrtplan")]),
+                        np.median(lens[(scene, "RRTConnect")])])
+            print(f"{name:22} {np.median(ours):10.2f} {np.median(rrt):13.2f} "
+                  f"{ratio:7.1f}x")
+            if ratio < 1:
+                behind.append(f"{name} ({1 / ratio:.2f}x)")
+    print("RRTConnect ahead in median time on: " + (", ".join(behind) or "no scene"))
 
 
 def plot(lines, fams, path):
