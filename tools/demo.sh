@@ -45,4 +45,4 @@ PY
 echo
 tools/demo_can.sh
 echo
-echo "Plans, masks and pictures: $out/ (*_cspace.png, *_arm.png; can_trace.png with vcan0)"
+echo "Plans, masks and pictures: $out/ (*_cspace.png, *_arm.png, can_trace.png)"
