@@ -150,8 +150,6 @@ def main():
     ap.add_argument("--out", required=True)
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
-    subprocess.run(["ip", "route", "add", "239.0.0.0/8", "dev", "lo"],
-                   capture_output=True)
     network = canopen.Network()
     network.connect(interface="socketcan", channel="vcan0")
     drives = [Drive(network, i, args.eds) for i in (1, 2, 3)]
