@@ -21,22 +21,24 @@ long qrt_cluster_scratch_len(long n)
 
 static void cube_of(const float p[3], double inv_cell, long key[3])
 {
-    int k;
-    for (k = 0; k < 3; k++)
-        key[k] = qrt_floor((double)p[k] * inv_cell);
+    /* written out: every point passes here, and the loop stayed rolled */
+    key[0] = qrt_floor((double)p[0] * inv_cell);
+    key[1] = qrt_floor((double)p[1] * inv_cell);
+    key[2] = qrt_floor((double)p[2] * inv_cell);
 }
 
 /* A cube's key packed into 30 bits (10 per axis), or -1 when it does not
  * fit (then keys are compared whole): the walk below compares each point's
- * cube with its chain's without computing it again. */
+ * cube with its chain's without computing it again. One test for the three
+ * axes: a key in [-512, 511] is one whose offset has no bit above bit 9. */
 static int32_t packed(const long key[3])
 {
-    int k;
-    for (k = 0; k < 3; k++)
-        if (key[k] < -512 || key[k] > 511)
-            return -1;
-    return (int32_t)(((key[0] + 512) << 20) | ((key[1] + 512) << 10) |
-                     (key[2] + 512));
+    unsigned long x = (unsigned long)(key[0] + 512),
+                  y = (unsigned long)(key[1] + 512),
+                  z = (unsigned long)(key[2] + 512);
+    if (((x | y | z) & ~1023UL) != 0)
+        return -1;
+    return (int32_t)((x << 20) | (y << 10) | z);
 }
 
 /* Do points a and b lie in the same cube? */
@@ -49,6 +51,13 @@ static int same_cube(const float (*pts)[3], const int32_t *cube, long a, long b,
     cube_of(pts[a], inv_cell, ka);
     cube_of(pts[b], inv_cell, kb);
     return ka[0] == kb[0] && ka[1] == kb[1] && ka[2] == kb[2];
+}
+
+/* The slot of a packed key: Fibonacci hashing, the top log2(size) bits of
+ * one 32-bit product (cubes that differ only in their low bits spread). */
+static long slot_of_packed(int32_t key, int size_bits)
+{
+    return (long)(((uint32_t)key * 0x9E3779B1u) >> (32 - size_bits));
 }
 
 static long slot_of(const long key[3], long size)
@@ -68,15 +77,22 @@ void qrt_cluster_points(const float (*pts)[3], long n, double cell_m,
     int32_t *head = scratch, *next = scratch + size, *cube = next + n;
     int32_t members[64];
     double inv_cell = 1.0 / cell_m;
+    int size_bits = 0;
     if (max_members > 64)
         max_members = 64;
+    while ((1L << size_bits) < size)
+        size_bits++;
     for (s = 0; s < size; s++)
         head[s] = -1;
+    /* Which slot a cube takes decides only the order groups are visited
+     * in, never which points share a group: a chain keeps its points in
+     * reverse index order, whichever other cubes share it. */
     for (i = 0; i < n; i++) {
         long key[3];
         cube_of(pts[i], inv_cell, key);
-        s = slot_of(key, size);
         cube[i] = packed(key);
+        s = cube[i] >= 0 ? slot_of_packed(cube[i], size_bits)
+                         : slot_of(key, size);
         next[i] = head[s];
         head[s] = (int32_t)i;
     }

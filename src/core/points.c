@@ -80,6 +80,20 @@ static void requantise(struct qrt_points *pts, double voxel_m)
     }
 }
 
+/* Is every coordinate of the n points finite? x - x is 0 for a finite x
+ * and NaN for an infinite or NaN one, and a NaN survives the sum: one
+ * compare a point instead of three classifications. */
+static int all_finite(const double *xyz, long n)
+{
+    long i;
+    for (i = 0; i < n; i++) {
+        const double *p = xyz + 3 * i;
+        if ((p[0] - p[0]) + (p[1] - p[1]) + (p[2] - p[2]) != 0.0)
+            return 0;
+    }
+    return 1;
+}
+
 static void add_one(struct qrt_points *pts, const double p[3])
 {
     for (;;) {
@@ -130,9 +144,29 @@ int qrt_points_add(struct qrt_points *pts, const double *xyz, long n)
     double r2 = pts->reach_m * pts->reach_m;
     if (n < 0 || (n > 0 && !xyz))
         return QRT_E_INVALID;
-    for (i = 0; i < 3 * n; i++)
-        if (!isfinite(xyz[i]))
-            return QRT_E_INVALID;
+    if (!all_finite(xyz, n))
+        return QRT_E_INVALID;
+    if (pts->voxel_m == 0.0 && n <= QRT_MAX_POINTS - pts->count) {
+        /* every point fits exactly: the table's counters kept in locals
+         * (the stores into xyz would otherwise reload them each point) */
+        float(*dst)[3] = pts->xyz;
+        long count = pts->count, far = 0;
+        for (i = 0; i < n; i++) {
+            const double *p = xyz + 3 * i;
+            if (p[0] * p[0] + p[1] * p[1] + p[2] * p[2] > r2) {
+                far++;
+                continue;
+            }
+            dst[count][0] = (float)p[0];
+            dst[count][1] = (float)p[1];
+            dst[count][2] = (float)p[2];
+            count++;
+        }
+        pts->count = count;
+        pts->received += n;
+        pts->ignored_far += far;
+        return QRT_OK;
+    }
     for (i = 0; i < n; i++) {
         const double *p = xyz + 3 * i;
         pts->received++;

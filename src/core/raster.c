@@ -665,6 +665,8 @@ static void raster_plane(const struct qrt_raster *r, int ia, double rho,
 static int alpha_window(const struct qrt_raster *r, double rho, double phi,
                         double rmax, int ranges[6][2])
 {
+    /* phi may come from qrt_fast_atan2: its error is one of the two
+     * QRT_FAST_ANGLE_ERR in ANG_EPS (asin is libm's, exact to rounding) */
     const struct qrt_lattice *lat = &r->mask->lat;
     int side, n = 0;
     if (rho <= rmax) {
@@ -698,7 +700,7 @@ static void raster_planes(const struct qrt_raster *r, const double p[3],
 void qrt_raster_point(const struct qrt_raster *r, const double p[3])
 {
     double rho = sqrt(p[0] * p[0] + p[1] * p[1]);
-    double phi = atan2(p[1], p[0]);
+    double phi = qrt_fast_atan2(p[1], p[0]); /* (alpha_window's ANG_EPS) */
     raster_link1(r, rho, p);
     raster_planes(r, p, rho, phi);
 }
@@ -706,13 +708,12 @@ void qrt_raster_point(const struct qrt_raster *r, const double p[3])
 static void set_alpha_bits(const struct qrt_raster *r, double rho, double phi,
                            double reach, struct qrt_cluster_geom *g)
 {
-    int ranges[6][2], n, i, ia, w;
+    int ranges[6][2], n, i, w;
     for (w = 0; w < QRT_ALPHA_WORDS; w++)
         g->alpha[w] = 0;
     n = alpha_window(r, rho, phi, reach, ranges);
     for (i = 0; i < n; i++)
-        for (ia = ranges[i][0]; ia <= ranges[i][1]; ia++)
-            g->alpha[ia >> 6] |= 1ULL << (ia & 63);
+        set_row_range(g->alpha, ranges[i][0], ranges[i][1]);
 }
 
 void qrt_raster_cluster_prepare(const struct qrt_raster *r,
@@ -720,34 +721,49 @@ void qrt_raster_cluster_prepare(const struct qrt_raster *r,
                                 int m, struct qrt_cluster_geom *g, double *mrho)
 {
     double lo[3], hi[3], ball = 0.0;
+    double lo_x, lo_y, lo_z, hi_x, hi_y, hi_z;
     int j, k;
     g->m = m;
     g->ball = 0.0;
-    for (k = 0; k < 3; k++)
-        lo[k] = hi[k] = pts[members[0]][k];
+    lo_x = hi_x = pts[members[0]][0];
+    lo_y = hi_y = pts[members[0]][1];
+    lo_z = hi_z = pts[members[0]][2];
+    /* the axes written out, the box in scalars: every point of the cloud
+     * passes here once, and arrays indexed by k stayed in memory */
     for (j = 0; j < m; j++) {
+        const float *q = pts[members[j]];
         double p[3];
-        for (k = 0; k < 3; k++) {
-            p[k] = pts[members[j]][k];
-            lo[k] = p[k] < lo[k] ? p[k] : lo[k];
-            hi[k] = p[k] > hi[k] ? p[k] : hi[k];
-        }
+        p[0] = q[0];
+        p[1] = q[1];
+        p[2] = q[2];
+        lo_x = p[0] < lo_x ? p[0] : lo_x;
+        hi_x = p[0] > hi_x ? p[0] : hi_x;
+        lo_y = p[1] < lo_y ? p[1] : lo_y;
+        hi_y = p[1] > hi_y ? p[1] : hi_y;
+        lo_z = p[2] < lo_z ? p[2] : lo_z;
+        hi_z = p[2] > hi_z ? p[2] : hi_z;
         mrho[j] = sqrt(p[0] * p[0] + p[1] * p[1]);
         if (fabs(p[2]) < r->radius_m[0]) /* (raster_link1's own first test) */
             raster_link1(r, mrho[j], p);
     }
+    lo[0] = lo_x;
+    lo[1] = lo_y;
+    lo[2] = lo_z;
+    hi[0] = hi_x;
+    hi[1] = hi_y;
+    hi[2] = hi_z;
     for (k = 0; k < 3; k++)
         g->c[k] = 0.5 * (lo[k] + hi[k]);
     g->rho = sqrt(g->c[0] * g->c[0] + g->c[1] * g->c[1]);
     if (m == 1) { /* the point itself, as qrt_raster_point takes it */
-        set_alpha_bits(r, g->rho, atan2(g->c[1], g->c[0]), max_plane_radius(r),
-                       g);
+        set_alpha_bits(r, g->rho, qrt_fast_atan2(g->c[1], g->c[0]),
+                       max_plane_radius(r), g);
         return;
     }
     for (k = 0; k < 3; k++)
         ball += 0.25 * (hi[k] - lo[k]) * (hi[k] - lo[k]);
     g->ball = sqrt(ball) * (1.0 + 1e-12) + 1e-12;
-    set_alpha_bits(r, g->rho, atan2(g->c[1], g->c[0]),
+    set_alpha_bits(r, g->rho, qrt_fast_atan2(g->c[1], g->c[0]),
                    max_plane_radius(r) + g->ball, g);
 }
 

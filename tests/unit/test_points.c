@@ -62,6 +62,60 @@ static void test_far_and_bad(void)
     CHECK(qrt_points_add(&pts, NULL, -1) == QRT_E_INVALID, "negative count");
 }
 
+/* Every way a coordinate can be unusable, in every axis of a point in the
+ * middle of a batch: refused whole, nothing counted. Finite extremes
+ * (1e308, the smallest subnormal) are usable, far ones ignored. */
+static void test_each_bad_coordinate(void)
+{
+    const double bad[4] = {NAN, -NAN, INFINITY, -INFINITY};
+    double batch[3 * 5];
+    double extremes[3 * 4] = {1e308,    0, 0, -1e308, 1e308, -1e308,
+                              4.9e-324, 0, 0, 0.2,    -0.3,  0.1};
+    int v, k, i;
+    qrt_points_reset(&pts, 1.0);
+    for (v = 0; v < 4; v++)
+        for (k = 0; k < 3; k++) {
+            for (i = 0; i < 15; i++)
+                batch[i] = 0.01 * (double)(i + 1);
+            batch[3 * 2 + k] = bad[v];
+            CHECK(qrt_points_add(&pts, batch, 5) == QRT_E_INVALID,
+                  "value %d in axis %d refused", v, k);
+            CHECK(pts.count == 0 && pts.received == 0 && pts.ignored_far == 0,
+                  "value %d axis %d: nothing counted (%ld %ld %ld)", v, k,
+                  pts.count, pts.received, pts.ignored_far);
+        }
+    CHECK(qrt_points_add(&pts, extremes, 4) == QRT_OK, "finite extremes");
+    CHECK(pts.count == 2 && pts.received == 4 && pts.ignored_far == 2,
+          "extremes: %ld stored, %ld received, %ld far", pts.count,
+          pts.received, pts.ignored_far);
+}
+
+/* The counters mean the same whether a batch fits the exact table or
+ * tips it into voxels: received counts every point passed, ignored_far
+ * those beyond reach, and the rest are stored (or merged into a voxel). */
+static void test_counters_both_ways(void)
+{
+    static double xyz[3 * 2 * QRT_MAX_POINTS];
+    long i, n = 2 * QRT_MAX_POINTS, far = 0;
+    qrt_points_reset(&pts, 1.0);
+    for (i = 0; i < n; i++) {
+        int is_far = (i % 7) == 3;
+        xyz[3 * i] = is_far ? 1.5 : test_uniform(-0.5, 0.5);
+        xyz[3 * i + 1] = test_uniform(-0.5, 0.5);
+        xyz[3 * i + 2] = test_uniform(-0.2, 0.2);
+        far += is_far;
+    }
+    CHECK(qrt_points_add(&pts, xyz, 1000) == QRT_OK, "exact batch");
+    CHECK(pts.received == 1000 && pts.ignored_far == 143 &&
+              pts.count == 1000 - 143 && pts.voxel_m == 0.0,
+          "exact: %ld %ld %ld", pts.received, pts.ignored_far, pts.count);
+    CHECK(qrt_points_add(&pts, xyz + 3 * 1000, n - 1000) == QRT_OK,
+          "overflowing batch");
+    CHECK(pts.received == n && pts.ignored_far == far && pts.voxel_m > 0.0,
+          "voxels: %ld of %ld received, %ld of %ld far", pts.received, n,
+          pts.ignored_far, far);
+}
+
 /* A long arm reaches so much space that not even 64 mm voxels fit: the
  * planner must refuse with QRT_STATUS_CAPACITY, never overflow. */
 static void test_capacity(void)
@@ -94,6 +148,8 @@ int main(void)
     test_seed(99);
     test_exact_then_voxels();
     test_far_and_bad();
+    test_each_bad_coordinate();
+    test_counters_both_ways();
     test_capacity();
     return test_done("test_points");
 }
