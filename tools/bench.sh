@@ -45,6 +45,6 @@ fi
 
 # qrtplan against OMPL (issue 6): the same scenes, interleaved, oracle-checked
 if [ -x build/bin/bench_ompl ]; then
-    .venv/bin/python tools/bench_compare.py --repeats "${QRT_BENCH_OMPL_REPEATS:-5}" \
+    .venv/bin/python tools/bench_compare.py --repeats "${QRT_BENCH_OMPL_REPEATS:-15}" \
         --out "$out" | tee "$out/ompl_summary.txt"
 fi

@@ -126,7 +126,7 @@ def check_oracle(scene_path, waypoints, cache={}):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--repeats", type=int, default=15)
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--time-limit", type=float, default=5.0)
     ap.add_argument("--smoke", action="store_true")
