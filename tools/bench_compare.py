@@ -7,8 +7,9 @@ runs build/bin/bench_ompl on them (the two sides interleaved repetition by
 repetition in one process), checks every returned path with the independent
 oracle (tools/oracle.py, 0.1 degree sampling), and writes
 build/bench/ompl_compare.csv, ompl_summary.csv (per family),
-ompl_per_scene.csv (per scene, qrtplan against RRTConnect) and
-ompl_compare.png.
+ompl_per_scene.csv (per scene, qrtplan against RRTConnect),
+ompl_compare.png (per family) and ompl_per_scene.png (each scene's speed-up
+beside the 1x and 10x lines).
 
     .venv/bin/python tools/bench_compare.py [--repeats R] [--seeds N]
     .venv/bin/python tools/bench_compare.py --smoke      # a few seconds, for make test
@@ -196,9 +197,11 @@ def main():
             print(f"{fam}: {who} in median time to a path; median length "
                   f"{np.median(ours['len']):.0f} (qrtplan) vs "
                   f"{np.median(rrt['len']):.0f} deg (RRTConnect)")
-    per_scene(rows, family_of, made, os.path.join(args.out, "ompl_per_scene.csv"))
-    if not args.smoke:
-        plot(lines, fams, os.path.join(args.out, "ompl_compare.png"))
+    speedups = per_scene(rows, family_of, made,
+                         os.path.join(args.out, "ompl_per_scene.csv"))
+    # drawn in the smoke run too, so that make test runs the plotting code
+    plot(lines, fams, os.path.join(args.out, "ompl_compare.png"))
+    plot_per_scene(speedups, fams, os.path.join(args.out, "ompl_per_scene.png"))
     for p in problems:
         print("FAIL", p)
     return 1 if problems else 0
@@ -206,13 +209,14 @@ def main():
 
 def per_scene(rows, family_of, made, path):
     """A family's median can hide a scene where RRTConnect is ahead: print
-    and write each scene's medians (successful runs), and name those."""
+    and write each scene's medians (successful runs), and name those.
+    Returns [(family, scene name, speed-up)]."""
     times, lens = defaultdict(list), defaultdict(list)
     for r in rows:
         if r["success"] == "1" and r["planner"] in ("qrtplan", "RRTConnect"):
             times[(r["scene"], r["planner"])].append(float(r["time_ms"]))
             lens[(r["scene"], r["planner"])].append(float(r["length_deg"]))
-    behind = []
+    behind, speedups = [], []
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["family", "scene", "qrtplan_median_ms", "rrtconnect_median_ms",
@@ -229,9 +233,50 @@ def per_scene(rows, family_of, made, path):
                         np.median(lens[(scene, "RRTConnect")])])
             print(f"{name:22} {np.median(ours):10.2f} {np.median(rrt):13.2f} "
                   f"{ratio:7.1f}x")
+            speedups.append((family_of[scene], name, ratio))
             if ratio < 1:
                 behind.append(f"{name} ({1 / ratio:.2f}x)")
     print("RRTConnect ahead in median time on: " + (", ".join(behind) or "no scene"))
+    return speedups
+
+
+def plot_per_scene(speedups, fams, path):
+    """Each scene's speed-up over RRTConnect on a log axis, coloured by
+    family, with the 1x (level) and 10x (the issue's target) lines: the
+    picture of where qrtplan is ahead and by how much."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    if not speedups:
+        return
+    colours = {fam: plt.get_cmap("tab10")(i) for i, fam in enumerate(fams)}
+    fig, ax = plt.subplots(figsize=(8, 0.32 * len(speedups) + 1.4))
+    y = np.arange(len(speedups))[::-1]
+    ratios = [r for _, _, r in speedups]
+    # bars grow from the level line: right where qrtplan is ahead, left
+    # where RRTConnect is
+    ax.barh(y, [r - 1.0 for r in ratios], left=1.0,
+            color=[colours[f] for f, _, _ in speedups])
+    for yi, r in zip(y, ratios):
+        ax.text(r * 1.05 if r >= 1 else r / 1.05, yi, f"{r:.2f}x", va="center",
+                ha="left" if r >= 1 else "right", fontsize=8)
+    ax.set_yticks(y, [n for _, n, _ in speedups], fontsize=8)
+    ax.set_xscale("log")
+    ax.set_xlim(min(0.3, min(ratios) / 1.8), max(20.0, max(ratios) * 1.5))
+    ticks = [t for t in (0.1, 0.2, 0.5, 1, 2, 5, 10, 20, 50, 100)
+             if ax.get_xlim()[0] <= t <= ax.get_xlim()[1]]
+    ax.set_xticks(ticks, [f"{t:g}x" for t in ticks])
+    ax.axvline(1.0, color="black", lw=1)
+    ax.axvline(10.0, color="grey", lw=1, ls="--")
+    ax.text(1.02, y[0] + 0.7, "level", fontsize=8)
+    ax.text(10.2, y[0] + 0.7, "10x target", fontsize=8, color="grey")
+    ax.set_xlabel("RRTConnect median time / qrtplan median time (log; > 1: qrtplan ahead)")
+    ax.set_title("speed-up over RRTConnect, scene by scene")
+    handles = [plt.Rectangle((0, 0), 1, 1, color=colours[f]) for f in fams]
+    ax.legend(handles, fams, fontsize=8, loc="lower right")
+    ax.grid(axis="x", alpha=0.3, which="both")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
 
 
 def plot(lines, fams, path):
