@@ -720,9 +720,8 @@ void qrt_raster_cluster_prepare(const struct qrt_raster *r,
                                 const float (*pts)[3], const int32_t *members,
                                 int m, struct qrt_cluster_geom *g, double *mrho)
 {
-    double lo[3], hi[3], ball = 0.0;
-    double lo_x, lo_y, lo_z, hi_x, hi_y, hi_z;
-    int j, k;
+    double lo_x, lo_y, lo_z, hi_x, hi_y, hi_z, dx, dy, dz;
+    int j;
     g->m = m;
     g->ball = 0.0;
     lo_x = hi_x = pts[members[0]][0];
@@ -746,23 +745,22 @@ void qrt_raster_cluster_prepare(const struct qrt_raster *r,
         if (fabs(p[2]) < r->radius_m[0]) /* (raster_link1's own first test) */
             raster_link1(r, mrho[j], p);
     }
-    lo[0] = lo_x;
-    lo[1] = lo_y;
-    lo[2] = lo_z;
-    hi[0] = hi_x;
-    hi[1] = hi_y;
-    hi[2] = hi_z;
-    for (k = 0; k < 3; k++)
-        g->c[k] = 0.5 * (lo[k] + hi[k]);
+    g->c[0] = 0.5 * (lo_x + hi_x);
+    g->c[1] = 0.5 * (lo_y + hi_y);
+    g->c[2] = 0.5 * (lo_z + hi_z);
     g->rho = sqrt(g->c[0] * g->c[0] + g->c[1] * g->c[1]);
     if (m == 1) { /* the point itself, as qrt_raster_point takes it */
         set_alpha_bits(r, g->rho, qrt_fast_atan2(g->c[1], g->c[0]),
                        max_plane_radius(r), g);
         return;
     }
-    for (k = 0; k < 3; k++)
-        ball += 0.25 * (hi[k] - lo[k]) * (hi[k] - lo[k]);
-    g->ball = sqrt(ball) * (1.0 + 1e-12) + 1e-12;
+    dx = hi_x - lo_x;
+    dy = hi_y - lo_y;
+    dz = hi_z - lo_z;
+    /* the half-diagonal, summed in the axes' order */
+    g->ball =
+        sqrt(0.25 * dx * dx + 0.25 * dy * dy + 0.25 * dz * dz) * (1.0 + 1e-12) +
+        1e-12;
     set_alpha_bits(r, g->rho, qrt_fast_atan2(g->c[1], g->c[0]),
                    max_plane_radius(r) + g->ball, g);
 }
