@@ -122,6 +122,7 @@ union qrt_lazy_table {
         view[QRT_LAZY_TABLE_BYTES / (long)sizeof(struct qrt_alpha_view)];
     struct qrt_disc disc[QRT_LAZY_TABLE_BYTES / (long)sizeof(struct qrt_disc)];
     int32_t list[QRT_LAZY_TABLE_BYTES / (long)sizeof(int32_t)];
+    uint64_t row_views[QRT_LAZY_TABLE_BYTES / (long)sizeof(uint64_t)];
 };
 struct qrt_lazy_clusters {
     union qrt_lazy_table t;
@@ -137,6 +138,12 @@ struct qrt_lazy_clusters {
     (QRT_MAX_NODES - (long)((sizeof(struct qrt_lazy_clusters) +                \
                              sizeof(struct qrt_heap_entry) - 1) /              \
                             sizeof(struct qrt_heap_entry)))
+/* An alpha node's views are indexed by sigma row once this many of its
+ * nodes have been asked alone (see lazy_alpha_index). */
+#ifndef QRT_LAZY_INDEX_AFTER
+#define QRT_LAZY_INDEX_AFTER 16
+#endif
+#define QRT_LAZY_NO_INDEX (-2147483647 - 1)
 
 /* The nodes nearest the goal, with their exact cost to it, found by a
  * short Dijkstra from the goal before A* starts (perimeter search): A*'s
@@ -153,7 +160,10 @@ struct qrt_goal_region {
     int settled, rim; /* entries used below */
     int used; /* whether A* took its estimate (it said more at a seed) */
     int32_t node[QRT_GOAL_REGION_NODES]; /* every node settled */
-    float cost[QRT_GOAL_REGION_NODES];   /* its exact cost to the goal */
+    /* bit ia set: a settled node lies on alpha node ia (a node on any
+     * other cannot be one of them, so A* skips the look-up) */
+    uint64_t alpha[QRT_ALPHA_WORDS];
+    float cost[QRT_GOAL_REGION_NODES]; /* its exact cost to the goal */
     /* the settled nodes with a free neighbour outside the region (every
      * path from outside enters through one): lattice coordinates and cost
      * in grid steps, in columns that A* reads whole (a rim shorter than
@@ -205,6 +215,12 @@ struct qrt_planner {
      * lazy_alpha_count[ia] from view lazy_alpha_first[ia] (-1: none) */
     long lazy_views_top;
     int32_t lazy_alpha_first[QRT_MAX_NA], lazy_alpha_count[QRT_MAX_NA];
+    /* alpha node ia's views by sigma row, once QRT_LAZY_INDEX_AFTER of its
+     * nodes have been asked alone: from table entry lazy_alpha_index[ia]
+     * (a row_views entry >= 0), a bit per view for each row, the rows one
+     * after another; below 0, -1 minus the nodes asked so far, or
+     * QRT_LAZY_NO_INDEX when it did not fit */
+    int32_t lazy_alpha_index[QRT_MAX_NA];
     /* where they fit (lazy_lists), each alpha node's kept clusters (those
      * whose window holds it) are listed from table entry
      * lazy_alpha_list[ia] (int32s right after the clusters, up to byte

@@ -26,6 +26,7 @@ static void forget_views(struct qrt_planner *pl)
     for (ia = 0; ia < QRT_MAX_NA; ia++) {
         pl->lazy_alpha_first[ia] = -1;
         pl->lazy_alpha_count[ia] = 0;
+        pl->lazy_alpha_index[ia] = -1;
     }
 }
 
@@ -271,6 +272,41 @@ void qrt_lazy_build(struct qrt_planner *pl, int ia, int is)
     mark_ready(pl, ia, is);
 }
 
+/* Alpha node ia's views by sigma row (see lazy_alpha_index), made once
+ * enough of its nodes have been asked alone that reading only the views of
+ * a node's row saves more than the index costs; NULL until then, or when
+ * it does not fit (the views are never forgotten for it: the caller holds
+ * their place). */
+static const uint64_t *row_index(struct qrt_planner *pl, long first, int ia)
+{
+    struct qrt_lazy_clusters *c = &pl->open.lazy.clusters;
+    int32_t *at = &pl->lazy_alpha_index[ia];
+    long n = pl->lazy_alpha_count[ia], words = (n + 63) / 64, k, w, index;
+    int ns = pl->mask.lat.n[1];
+    if (*at >= 0)
+        return &c->t.row_views[*at];
+    if (*at == QRT_LAZY_NO_INDEX || --*at > -1 - QRT_LAZY_INDEX_AFTER)
+        return NULL;
+    index = table_take(pl, ns * words, (long)sizeof(uint64_t));
+    if (index < 0) {
+        *at = QRT_LAZY_NO_INDEX;
+        return NULL;
+    }
+    for (k = 0; k < ns * words; k++)
+        c->t.row_views[index + k] = 0;
+    for (k = 0; k < n; k++)
+        for (w = 0; w < QRT_SIGMA_WORDS; w++) {
+            uint64_t rows = c->t.view[first + k].rows[w];
+            for (; rows; rows &= rows - 1U) {
+                long is = (w << 6) + qrt_lowest_bit(rows);
+                c->t.row_views[index + is * words + (k >> 6)] |= 1ULL
+                                                                 << (k & 63);
+            }
+        }
+    *at = (int32_t)index;
+    return &c->t.row_views[index];
+}
+
 /* Node (ia, is, ie) from the kept views of alpha node ia: blocked when
  * a view's ball and then one of its members (a one-point cluster: the
  * point) meet it; the first that does ends the question. (Not static,
@@ -282,8 +318,12 @@ int qrt_lazy_node_from_views(struct qrt_planner *pl, long first, int ia, int is,
     struct qrt_disc scratch[QRT_CLUSTER_MAX];
     const struct qrt_alpha_view *views = &c->t.view[first];
     long k, n = pl->lazy_alpha_count[ia];
-    for (k = qrt_raster_next_ball(pl->lazy_raster, views, 0, n, is, ie); k < n;
-         k = qrt_raster_next_ball(pl->lazy_raster, views, k + 1, n, is, ie)) {
+    const uint64_t *index = row_index(pl, first, ia), *row = NULL;
+    if (index)
+        row = index + (long)is * ((n + 63) / 64);
+    for (k = qrt_raster_next_ball(pl->lazy_raster, views, row, 0, n, is, ie);
+         k < n; k = qrt_raster_next_ball(pl->lazy_raster, views, row, k + 1, n,
+                                         is, ie)) {
         struct qrt_alpha_view *v = &c->t.view[first + k];
         int m = c->t.geom[v->cluster].m;
         if (m == 1 ||

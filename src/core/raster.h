@@ -116,7 +116,8 @@ void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
  * So one node can be asked without its row, and gets the bit a row build
  * gives it:
  * - _next_ball: the first of views[k .. n-1] whose ball meets node
- *   (is, ie) by the sector test, or n;
+ *   (is, ie) by the sector test, or n; row_views, if not NULL, has bit k
+ *   set exactly for the views whose rows hold is (only those are read);
  * - _node_members: does one of the m members' discs? */
 int qrt_raster_view_make(const struct qrt_raster *r, const float (*pts)[3],
                          const int32_t *members, const double *mrho,
@@ -132,8 +133,9 @@ void qrt_raster_view_members(const struct qrt_raster *r, int ia, int is,
                              const uint64_t ask[QRT_ROW_WORDS],
                              const struct qrt_disc *md, int m);
 long qrt_raster_next_ball(const struct qrt_raster *r,
-                          const struct qrt_alpha_view *views, long k, long n,
-                          int is, int ie);
+                          const struct qrt_alpha_view *views,
+                          const uint64_t *row_views, long k, long n, int is,
+                          int ie);
 int qrt_raster_node_members(const struct qrt_raster *r, int is, int ie,
                             const struct qrt_disc *md, int m);
 

@@ -185,11 +185,13 @@ static double region_estimate(const struct qrt_goal_region *g,
     h = lane[0] < lane[1] ? lane[0] : lane[1];
     h = lane[2] < h ? lane[2] : h;
     h = lane[3] < h ? lane[3] : h;
-    for (i = 0; i < g->settled; i++) {
-        if (g->node[i] == (int32_t)node) {
-            float exact = g->cost[i] / (float)lat->grid_deg;
-            h = exact < h ? exact : h;
-            break;
+    if ((g->alpha[ijk[0] >> 6] >> (ijk[0] & 63)) & 1U) {
+        for (i = 0; i < g->settled; i++) {
+            if (g->node[i] == (int32_t)node) {
+                float exact = g->cost[i] / (float)lat->grid_deg;
+                h = exact < h ? exact : h;
+                break;
+            }
         }
     }
     return h >= HUGE_VALF ? HUGE_VAL : (double)h * lat->grid_deg;
@@ -350,6 +352,7 @@ static void search_from(struct qrt_planner *pl, const struct moves *mv,
         res->expanded++;
         if (region) {
             region->node[region->settled] = (int32_t)u;
+            region->alpha[ijk[0] >> 6] |= 1ULL << (ijk[0] & 63);
             region->cost[region->settled] = pl->search.dist[u];
             if (++region->settled == QRT_GOAL_REGION_NODES)
                 break;
@@ -471,6 +474,7 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
     struct qrt_goal_region *region = &pl->goal_region;
     struct moves mv;
     struct estimate est;
+    int i;
 
     if (!pl->lazy)
         pl->lazy_kept = 0; /* the heap may use the whole array */
@@ -481,6 +485,8 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
     res->cost = HUGE_VAL;
     res->expanded = 0;
     region->settled = region->rim = region->used = 0;
+    for (i = 0; i < QRT_ALPHA_WORDS; i++)
+        region->alpha[i] = 0;
     if (est.active) {
         struct estimate none = est;
         none.active = 0;

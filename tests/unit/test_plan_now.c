@@ -141,6 +141,7 @@ static void random_plans(void)
 {
     static const double grids[3] = {5.0, 10.0, 20.0};
     long trial, ok = 0, differing = 0, partial = 0, kept = 0, unkept = 0;
+    long indexed = 0, unindexed = 0;
     for (trial = 0; trial < test_count(200); trial++) {
         struct qrt_params prm;
         struct qrt_target s = {QRT_TARGET_JOINTS, {0, 0, 0}};
@@ -184,6 +185,13 @@ static void random_plans(void)
         rc_now = qrt_planner_plan_now(&pl, &s, &g, &now_plan);
         CHECK(rc_full == rc_now, "trial %ld: rc %d vs %d", trial, rc_full,
               rc_now);
+        {
+            int ia;
+            for (ia = 0; ia < QRT_MAX_NA; ia++) {
+                indexed += pl.lazy_alpha_index[ia] >= 0;
+                unindexed += pl.lazy_alpha_index[ia] == QRT_LAZY_NO_INDEX;
+            }
+        }
         if (rc_full != QRT_OK)
             continue;
         CHECK(same_plan(&full_plan, &now_plan),
@@ -222,9 +230,16 @@ static void random_plans(void)
 #if defined(QRT_LAZY_VIEW_BYTES) && QRT_LAZY_VIEW_BYTES < 1000
     /* the way out for members' discs that do not fit was taken (in a few
      * of the 200 plans: under emulation, a twentieth of them are run, too
-     * few to meet one) */
-    if (test_count(200) >= 200)
+     * few to meet one), and the one for a row index that does not fit */
+    if (test_count(200) >= 200) {
         CHECK(unkept > 0, "no members' discs made without being kept");
+        CHECK(unindexed > 0, "no alpha node went without its row index");
+    }
+#else
+    /* the known nodes above were read through row indexes, too (the
+     * builds with less room index an alpha node at its first node asked) */
+    if (test_count(200) >= 200)
+        CHECK(indexed > 0, "no alpha node's views indexed by row");
 #endif
 }
 
