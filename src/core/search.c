@@ -33,11 +33,26 @@ static inline int32_t place_of(const struct qrt_planner *pl, long node)
     return seen_node(pl, node) ? pl->heap_pos[node] : -1;
 }
 
+/* An entry's place in the heap's order as one integer: its key's bits,
+ * then its node. Keys are never negative, NaN or -0 (a cost so far plus an
+ * estimate clamped at +0), and the bits of such floats order as the
+ * floats do, so this is the order of (key, node), ties broken by node
+ * index so that every platform expands alike; one compare, with no
+ * branch, where two compares of floats and a tie test mispredicted. */
+static inline uint64_t heap_rank(const struct qrt_heap_entry *e)
+{
+    union {
+        float f;
+        uint32_t u;
+    } key;
+    key.f = e->key;
+    return ((uint64_t)key.u << 32) | (uint32_t)e->node;
+}
+
 static int heap_less(const struct qrt_heap_entry *a,
                      const struct qrt_heap_entry *b)
 {
-    /* ties broken by node index, so every platform expands alike */
-    return a->key < b->key || (a->key == b->key && a->node < b->node);
+    return heap_rank(a) < heap_rank(b);
 }
 
 static void heap_place(struct qrt_planner *pl, long i, struct qrt_heap_entry e)
@@ -66,8 +81,8 @@ static void sift_down(struct qrt_planner *pl, long i, long size)
         long c = 2 * i + 1;
         if (c >= size)
             break;
-        if (c + 1 < size && heap_less(&pl->open.heap[c + 1], &pl->open.heap[c]))
-            c++;
+        if (c + 1 < size)
+            c += heap_less(&pl->open.heap[c + 1], &pl->open.heap[c]);
         if (!heap_less(&pl->open.heap[c], &e))
             break;
         heap_place(pl, i, pl->open.heap[c]);
