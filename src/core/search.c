@@ -61,11 +61,14 @@ static void heap_place(struct qrt_planner *pl, long i, struct qrt_heap_entry e)
     pl->heap_pos[e.node] = (int32_t)i;
 }
 
+/* The heap is 4-ary: half the levels of a binary one, so a pop follows
+ * half as many dependent loads down it (a node's children are 4i+1 ..
+ * 4i+4). Any heap pops the same sequence, the order being total. */
 static void sift_up(struct qrt_planner *pl, long i)
 {
     struct qrt_heap_entry e = pl->open.heap[i];
     while (i > 0) {
-        long parent = (i - 1) / 2;
+        long parent = (i - 1) / 4;
         if (!heap_less(&e, &pl->open.heap[parent]))
             break;
         heap_place(pl, i, pl->open.heap[parent]);
@@ -76,17 +79,26 @@ static void sift_up(struct qrt_planner *pl, long i)
 
 static void sift_down(struct qrt_planner *pl, long i, long size)
 {
-    struct qrt_heap_entry e = pl->open.heap[i];
+    const struct qrt_heap_entry *h = pl->open.heap;
+    struct qrt_heap_entry e = h[i];
+    const uint64_t rank = heap_rank(&e);
     for (;;) {
-        long c = 2 * i + 1;
+        long c = 4 * i + 1, least = c, j;
+        uint64_t least_rank;
         if (c >= size)
             break;
-        if (c + 1 < size)
-            c += heap_less(&pl->open.heap[c + 1], &pl->open.heap[c]);
-        if (!heap_less(&pl->open.heap[c], &e))
+        least_rank = heap_rank(&h[c]);
+        /* the least child, by selects rather than branches */
+        for (j = c + 1; j < c + 4 && j < size; j++) {
+            uint64_t r = heap_rank(&h[j]);
+            int less = r < least_rank;
+            least = less ? j : least;
+            least_rank = less ? r : least_rank;
+        }
+        if (least_rank >= rank)
             break;
-        heap_place(pl, i, pl->open.heap[c]);
-        i = c;
+        heap_place(pl, i, h[least]);
+        i = least;
     }
     heap_place(pl, i, e);
 }
