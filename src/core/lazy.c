@@ -299,8 +299,10 @@ static const uint64_t *row_index(struct qrt_planner *pl, long first, int ia)
             uint64_t rows = c->t.view[first + k].rows[w];
             for (; rows; rows &= rows - 1U) {
                 long is = (w << 6) + qrt_lowest_bit(rows);
-                c->t.row_views[index + is * words + (k >> 6)] |= 1ULL
-                                                                 << (k & 63);
+                if (is < ns) /* always (the axis's ranges); the writes
+                                stay in the index whatever a view says */
+                    c->t.row_views[index + is * words + (k >> 6)] |=
+                        1ULL << (k & 63);
             }
         }
     *at = (int32_t)index;
