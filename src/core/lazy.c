@@ -272,19 +272,20 @@ void qrt_lazy_build(struct qrt_planner *pl, int ia, int is)
     mark_ready(pl, ia, is);
 }
 
-/* Alpha node ia's views by sigma row (see lazy_alpha_index), made once
- * enough of its nodes have been asked alone that reading only the views of
- * a node's row saves more than the index costs; NULL until then, or when
- * it does not fit (the views are never forgotten for it: the caller holds
- * their place). */
-static const uint64_t *row_index(struct qrt_planner *pl, long first, int ia)
+/* The bits of alpha node ia's views that reach sigma row is, from its
+ * index (see lazy_alpha_index), made once enough of its nodes have been
+ * asked alone that reading only the views of a node's row saves more than
+ * the index costs; NULL until then, or when it does not fit (the views are
+ * never forgotten for it: the caller holds their place). */
+static const uint64_t *row_views_of(struct qrt_planner *pl, long first, int ia,
+                                    int is)
 {
     struct qrt_lazy_clusters *c = &pl->open.lazy.clusters;
     int32_t *at = &pl->lazy_alpha_index[ia];
     long n = pl->lazy_alpha_count[ia], words = (n + 63) / 64, k, w, index;
     int ns = pl->mask.lat.n[1];
     if (*at >= 0)
-        return &c->t.row_views[*at];
+        return &c->t.row_views[*at + is * words];
     if (*at == QRT_LAZY_NO_INDEX || --*at > -1 - QRT_LAZY_INDEX_AFTER)
         return NULL;
     index = table_take(pl, ns * words, (long)sizeof(uint64_t));
@@ -306,7 +307,7 @@ static const uint64_t *row_index(struct qrt_planner *pl, long first, int ia)
             }
         }
     *at = (int32_t)index;
-    return &c->t.row_views[index];
+    return &c->t.row_views[index + is * words];
 }
 
 /* Node (ia, is, ie) from the kept views of alpha node ia: blocked when
@@ -320,9 +321,7 @@ int qrt_lazy_node_from_views(struct qrt_planner *pl, long first, int ia, int is,
     struct qrt_disc scratch[QRT_CLUSTER_MAX];
     const struct qrt_alpha_view *views = &c->t.view[first];
     long k, n = pl->lazy_alpha_count[ia];
-    const uint64_t *index = row_index(pl, first, ia), *row = NULL;
-    if (index)
-        row = index + (long)is * ((n + 63) / 64);
+    const uint64_t *row = row_views_of(pl, first, ia, is);
     for (k = qrt_raster_next_ball(pl->lazy_raster, views, row, 0, n, is, ie);
          k < n; k = qrt_raster_next_ball(pl->lazy_raster, views, row, k + 1, n,
                                          is, ie)) {
