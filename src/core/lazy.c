@@ -299,10 +299,10 @@ static const uint64_t *row_views_of(struct qrt_planner *pl, long first, int ia,
         for (w = 0; w < QRT_SIGMA_WORDS; w++) {
             uint64_t rows = c->t.view[first + k].rows[w];
             for (; rows; rows &= rows - 1U) {
-                long is = (w << 6) + qrt_lowest_bit(rows);
-                if (is < ns) /* always (the axis's ranges); the writes
+                long row = (w << 6) + qrt_lowest_bit(rows);
+                if (row < ns) /* always (the axis's ranges); the writes
                                 stay in the index whatever a view says */
-                    c->t.row_views[index + is * words + (k >> 6)] |=
+                    c->t.row_views[index + row * words + (k >> 6)] |=
                         1ULL << (k & 63);
             }
         }
