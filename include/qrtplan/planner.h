@@ -172,6 +172,16 @@ struct qrt_goal_region {
         rim_e[QRT_GOAL_REGION_NODES], rim_steps[QRT_GOAL_REGION_NODES];
 };
 
+/* One stored configuration of a straight motion that is being proved free
+ * against the points themselves (the first thing a plan tries): cos and sin
+ * of alpha, of sigma and of sigma + eta, and the elbow in the arm's plane. */
+struct qrt_sweep_leaf {
+    double ca, sa, cs, ss, cp, sp, elbow_u, elbow_z;
+};
+/* How many: 256, or fewer where the search scratch they borrow is smaller. */
+#define QRT_SWEEP_LEAVES                                                       \
+    (QRT_MAX_NODES >= 4096 ? 256 : QRT_MAX_NODES >= 2048 ? 128 : 64)
+
 struct qrt_raster; /* internal: the conversion's tables */
 
 struct qrt_planner {
@@ -185,10 +195,11 @@ struct qrt_planner {
     uint64_t check_rows[QRT_ROW_SET_WORDS];
     /* search scratch, one entry per lattice node; while a mask is built,
      * heap_pos and cluster_scratch are the clustering scratch of parts 0
-     * and 1 */
+     * and 1; before the search, the straight motion's configurations */
     union {
         float dist[QRT_MAX_NODES];
         int32_t cluster_scratch[QRT_MAX_NODES];
+        struct qrt_sweep_leaf sweep[QRT_SWEEP_LEAVES];
     } search;
     union {
         struct qrt_heap_entry heap[QRT_MAX_NODES]; /* later holds the path */
@@ -262,18 +273,23 @@ int qrt_planner_build_mask_begin(struct qrt_planner *pl);
 int qrt_planner_build_mask_part(struct qrt_planner *pl, int part, int nparts);
 int qrt_planner_build_mask_end(struct qrt_planner *pl);
 
-/* Plan from start to goal on the built mask (paper blocks g-h). Returns
+/* Plan from start to goal on the built mask (paper blocks g-h). With
+ * shortcuts on (params.simplify), every plan first tries the straight
+ * motion between the ends' first joints (the target's, or its IK branch
+ * nearest the other end) against the points themselves, in one pass over
+ * them; when that proves it free, it is the plan. Returns
  * QRT_OK with the outcome in plan->status, or QRT_E_LIMITS when joints are
  * outside the limits, QRT_E_INVALID for NaN/Inf or a stale mask. */
 int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
                      const struct qrt_target *goal, struct qrt_plan *plan);
 
 /* qrt_planner_build_mask and qrt_planner_plan in one, with less work: the
- * plan is the same (the same waypoints, cost and nodes expanded), but only
- * the mask nodes it reads are found, as the search, the start and goal
- * connections and the shortcuts read them: one node at a time where the
- * sector test holds (every grid under 90 degrees), each with the bit the
- * whole mask gives it, else a row at a time. plan->cells_blocked is -1 (the
+ * plan is the same (the same waypoints, cost and nodes expanded). A
+ * straight motion proved against the points needs no mask node at all;
+ * otherwise only the mask nodes the plan reads are found, as the search, the
+ * start and goal connections and the shortcuts read them: one node at a time
+ * where the sector test holds (every grid under 90 degrees), each with the bit
+ * the whole mask gives it, else a row at a time. plan->cells_blocked is -1 (the
  * whole mask was not built), and the mask is left partial: a later
  * qrt_planner_plan or qrt_planner_check_path needs qrt_planner_build_mask
  * first. Same return codes as qrt_planner_plan, without the stale mask.
@@ -288,8 +304,9 @@ int qrt_planner_plan_now(struct qrt_planner *pl, const struct qrt_target *start,
                          const struct qrt_target *goal, struct qrt_plan *plan);
 
 /* The shortcut of an open scene, before any mask is built: with joint
- * targets, builds only the mask rows the straight motion from start to goal
- * passes through and tests that motion as qrt_planner_plan does. Returns 1
+ * targets, tests the straight motion from start to goal as qrt_planner_plan
+ * does (against the points, then on the mask rows it passes through, which
+ * are built only if the first test fails). Returns 1
  * with *plan the straight motion (status ok, cells_blocked -1: the mask was
  * not built), or 0: call qrt_planner_build_mask and qrt_planner_plan (also
  * for xyz targets, simplification off, or points lost to capacity); or

@@ -11,6 +11,7 @@
 #include "motion.h"
 #include "raster.h"
 #include "search.h"
+#include "sweep.h"
 
 /* Steps allowed when proving a start or goal connection against the raw
  * points; a connection that needs more is refused, never assumed. */
@@ -96,14 +97,19 @@ static void raster_cluster(void *ctx, const int32_t *members, int m)
     qrt_raster_cluster(c->raster, c->pts, members, m);
 }
 
+/* Link k's collision radius for the points now in the table. */
+static double points_radius(const struct qrt_planner *pl, int k)
+{
+    return pl->params.arm.link_radius_m[k] + pl->params.margin_m +
+           qrt_points_inflation_m(&pl->points);
+}
+
 /* Collision radii for the points now in the table, and an empty mask. */
 static void start_mask(struct qrt_planner *pl)
 {
-    double inflation = qrt_points_inflation_m(&pl->points);
     int k, ia, is, w;
     for (k = 0; k < 3; k++)
-        pl->radius_m[k] =
-            pl->params.arm.link_radius_m[k] + pl->params.margin_m + inflation;
+        pl->radius_m[k] = points_radius(pl, k);
     for (ia = 0; ia < QRT_MAX_NA; ia++)
         for (is = 0; is < QRT_MAX_NS; is++)
             for (w = 0; w < QRT_ROW_WORDS; w++)
@@ -176,14 +182,21 @@ int qrt_planner_build_mask(struct qrt_planner *pl)
     return qrt_planner_build_mask_end(pl);
 }
 
-/* Collision radii for checks against the raw points: the C-space margin
- * (Eq. 12) becomes the distance any arm point can move when every joint
- * turns by that margin. */
-static void exact_radii(const struct qrt_planner *pl, double radius[3])
+/* What checks against the raw points add to every radius: the C-space
+ * margin (Eq. 12) becomes the distance any arm point can move when every
+ * joint turns by that margin. */
+static double cspace_shift_m(const struct qrt_planner *pl)
 {
     const double *l = pl->params.arm.link_m;
-    double shift = pl->params.cspace_margin_deg * QRT_DEG *
-                   (arm_reach(&pl->params.arm) + (l[1] + l[2]) + l[2]);
+    return pl->params.cspace_margin_deg * QRT_DEG *
+           (arm_reach(&pl->params.arm) + (l[1] + l[2]) + l[2]);
+}
+
+/* Collision radii for checks against the raw points, once the mask's
+ * radii are set for them. */
+static void exact_radii(const struct qrt_planner *pl, double radius[3])
+{
+    double shift = cspace_shift_m(pl);
     int k;
     for (k = 0; k < 3; k++)
         radius[k] = pl->radius_m[k] + shift;
@@ -290,25 +303,19 @@ static void collect_ends(struct qrt_planner *pl, const double q[3],
 
 enum end_outcome { END_OK, END_UNREACHABLE, END_COLLIDES, END_STRANDED };
 
-/* Turn a start or goal into joints and its lattice connections. For an
- * end-effector point every IK branch is tried, nearest to ref first. */
-static enum end_outcome resolve_end(struct qrt_planner *pl,
-                                    const struct qrt_target *t,
-                                    const double ref[3], double q[3],
-                                    struct qrt_ends *ends)
+/* The joints a start or goal may take, nearest to ref first: the target's
+ * own for joints, every IK branch for an end-effector point. Returns how
+ * many (0: out of reach). */
+static int end_joints(const struct qrt_planner *pl, const struct qrt_target *t,
+                      const double ref[3], double out[4][3])
 {
-    double sols[4][3], dist[4], radius[3];
-    int order[4] = {0, 1, 2, 3}, n, i, k, any_free = 0;
-    exact_radii(pl, radius);
+    double sols[4][3], dist[4];
+    int order[4] = {0, 1, 2, 3}, n, i;
     if (t->kind == QRT_TARGET_JOINTS) {
-        n = 1;
-        for (k = 0; k < 3; k++)
-            sols[0][k] = t->value[k];
-    } else {
-        n = qrt_arm_ik(&pl->params.arm, t->value, ref[0], sols);
-        if (n == 0)
-            return END_UNREACHABLE;
+        copy_joints(out[0], t->value);
+        return 1;
     }
+    n = qrt_arm_ik(&pl->params.arm, t->value, ref[0], sols);
     for (i = 0; i < n; i++) {
         order[i] = i;
         dist[i] = qrt_arm_joint_distance(&pl->params.arm, ref, sols[i]);
@@ -321,8 +328,26 @@ static enum end_outcome resolve_end(struct qrt_planner *pl,
         }
         order[m] = o;
     }
+    for (i = 0; i < n; i++)
+        copy_joints(out[i], sols[order[i]]);
+    return n;
+}
+
+/* Turn a start or goal into joints and its lattice connections. For an
+ * end-effector point every IK branch is tried, nearest to ref first. */
+static enum end_outcome resolve_end(struct qrt_planner *pl,
+                                    const struct qrt_target *t,
+                                    const double ref[3], double q[3],
+                                    struct qrt_ends *ends)
+{
+    double sols[4][3], radius[3];
+    int n, i, any_free = 0;
+    exact_radii(pl, radius);
+    n = end_joints(pl, t, ref, sols);
+    if (n == 0)
+        return END_UNREACHABLE;
     for (i = 0; i < n; i++) {
-        const double *s = sols[order[i]];
+        const double *s = sols[i];
         /* a free cell proves s free; only near obstacles measure it */
         if (!motion_free(pl, s, s) &&
             qrt_clearance(&pl->params.arm, radius, &pl->points, s) <= 0.0)
@@ -334,7 +359,7 @@ static enum end_outcome resolve_end(struct qrt_planner *pl,
             return END_OK;
         }
     }
-    copy_joints(q, sols[order[0]]);
+    copy_joints(q, sols[0]);
     return any_free ? END_STRANDED : END_COLLIDES;
 }
 
@@ -513,6 +538,53 @@ static enum qrt_plan_status end_status(enum end_outcome o, int is_goal)
     return is_goal ? QRT_STATUS_GOAL_BLOCKED : QRT_STATUS_START_BLOCKED;
 }
 
+/* Open space, before any mask: the straight motion between the ends'
+ * first joints (as resolve_end orders them) proved free against the points
+ * themselves, in one pass over them. 1 with *plan that motion; 0 when it
+ * is not proved, and the mask decides (the plan is then untouched). The
+ * same test comes first in every plan, so plans with and without a whole
+ * mask agree. */
+static int plan_swept(struct qrt_planner *pl, const struct qrt_target *start,
+                      const struct qrt_target *goal, struct qrt_plan *plan)
+{
+    static const double origin[3] = {0.0, 0.0, 0.0};
+    double qs[4][3], qg[4][3], radius[3], shift = cspace_shift_m(pl);
+    int k;
+    if (!pl->params.simplify || pl->points.dropped > 0)
+        return 0;
+    if (end_joints(pl, start,
+                   goal->kind == QRT_TARGET_JOINTS ? goal->value : origin,
+                   qs) == 0 ||
+        end_joints(pl, goal, qs[0], qg) == 0)
+        return 0;
+    for (k = 0; k < 3; k++) /* exact_radii, before the mask's radii are set */
+        radius[k] = points_radius(pl, k) + shift;
+    if (!qrt_sweep_free(&pl->params.arm, radius, &pl->points,
+                        pl->mask.lat.alpha_wraps, qs[0], qg[0],
+                        pl->search.sweep))
+        return 0;
+    reset_plan(pl, plan);
+    copy_joints(plan->start_deg, qs[0]);
+    copy_joints(plan->goal_deg, qg[0]);
+    set_straight_plan(pl, plan, qs[0], qg[0]);
+    return 1;
+}
+
+/* plan_swept for the calls that build only what they read: those leave
+ * the mask partial whatever they did, so the next plain qrt_planner_plan
+ * builds one first. */
+static int plan_swept_maskless(struct qrt_planner *pl,
+                               const struct qrt_target *start,
+                               const struct qrt_target *goal,
+                               struct qrt_plan *plan)
+{
+    if (!plan_swept(pl, start, goal, plan))
+        return 0;
+    pl->mask_stale = 1;
+    pl->cells_blocked = plan->cells_blocked = -1;
+    return 1;
+}
+
 /* Start building rows as they are read, with r: from the clusters kept
  * for these points, or from new ones (on a cleared mask). 0 when they do
  * not fit beside the heap (the mask is then cleared and partial). */
@@ -585,10 +657,13 @@ int qrt_planner_plan_straight(struct qrt_planner *pl,
     if (start->kind != QRT_TARGET_JOINTS || goal->kind != QRT_TARGET_JOINTS ||
         !pl->params.simplify || pl->points.dropped > 0)
         return 0;
+    /* qrt_planner_plan's own two tests of the straight motion: against
+     * the points, then on the rows it passes through with the same mask
+     * walk */
+    if (plan_swept_maskless(pl, start, goal, plan))
+        return 1;
     copy_joints(wp[0], start->value);
     copy_joints(wp[1], goal->value);
-    /* the rows the straight motion passes through, and the same mask walk
-     * that qrt_planner_plan's own straight-motion test makes on them */
     build_rows_along(pl, (const double(*)[3])wp, 2);
     if (!motion_free(pl, wp[0], wp[1]))
         return 0;
@@ -673,7 +748,8 @@ int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
         return rc;
     if (pl->mask_stale)
         return QRT_E_INVALID;
-    plan_on_mask(pl, start, goal, plan);
+    if (!plan_swept(pl, start, goal, plan))
+        plan_on_mask(pl, start, goal, plan);
     return QRT_OK;
 }
 
@@ -703,6 +779,8 @@ int qrt_planner_plan_now(struct qrt_planner *pl, const struct qrt_target *start,
     int rc;
     if ((rc = check_targets(pl, start, goal)) != QRT_OK)
         return rc;
+    if (plan_swept_maskless(pl, start, goal, plan))
+        return QRT_OK;
     if (!plan_lazily(pl, start, goal, plan)) {
         qrt_planner_build_mask(pl);
         plan_on_mask(pl, start, goal, plan);

@@ -1,0 +1,259 @@
+/* Proving a straight motion free against the points in one pass over them
+ * (see sweep.h). */
+#include "sweep.h"
+
+#include <math.h>
+
+#include "fastmath.h"
+#include "geom.h"
+
+/* The stored configurations lie about this far apart (metres) for the
+ * fastest-moving point of the arm, at most QRT_SWEEP_LEAVES of them: a
+ * point that clear of the arm is passed with them alone, a closer one
+ * needs configurations computed for it. */
+#define LEAF_SPACING_M 0.01
+/* Steps the proof may take for one point, and over all points (this many
+ * a point, plus a start): a motion that brushes past points is left to the
+ * mask, which decides it for less. */
+#define STEPS_PER_POINT 64
+#define STEPS_MEAN 4
+#define STEPS_START 1024
+/* Clearance at or under this (metres) counts as contact, as in motion.c. */
+#define CONTACT_M 1e-7
+/* Every 16th point is tried first: a motion is seldom blocked by one
+ * point alone, so a blocked one is usually told from a sample. */
+#define SAMPLE_STRIDE 16
+
+struct sweep {
+    double link[3];
+    double a0, da, s0, ds, p0, dp; /* alpha, sigma and sigma + eta, radians:
+                                      at t = 0, and their change to t = 1 */
+    double radius[3];
+    /* 1 / how fast (metres per unit of t) any point of link k can move:
+     * each joint's rate times the farthest the link reaches from its axis
+     * (huge for a link that does not move) */
+    double speed[3], inv_speed[3];
+    double wall; /* a point farther than this from the arm's plane is clear
+                    of every link */
+    long n;      /* stored configurations, at t = (i + 0.5) / n */
+    struct qrt_sweep_leaf *leaf;
+    long steps_left;
+};
+
+static void leaf_at(const struct sweep *s, double t, struct qrt_sweep_leaf *lf)
+{
+    double a = s->a0 + t * s->da, sg = s->s0 + t * s->ds,
+           ps = s->p0 + t * s->dp;
+    lf->ca = cos(a);
+    lf->sa = sin(a);
+    lf->cs = cos(sg);
+    lf->ss = sin(sg);
+    lf->cp = cos(ps);
+    lf->sp = sin(ps);
+    lf->elbow_u = s->link[0] + s->link[1] * lf->cs;
+    lf->elbow_z = s->link[1] * lf->ss;
+}
+
+/* Squared distance, in the arm's plane, from (u, z) to the segment from
+ * (u0, z0) along the unit direction (cu, cz) for len. */
+static double seg_dist2(double u, double z, double u0, double z0, double cu,
+                        double cz, double len)
+{
+    double du = u - u0, dz = z - z0, along = du * cu + dz * cz;
+    if (along < 0.0)
+        along = 0.0;
+    else if (along > len)
+        along = len;
+    du -= along * cu;
+    dz -= along * cz;
+    return du * du + dz * dz;
+}
+
+/* For how long (in t, either way) from configuration lf every link stays
+ * clear of p: the least over the links of clearance over speed. At or
+ * under 0 where some link is in contact at lf itself. */
+static double clear_time(const struct sweep *s, const struct qrt_sweep_leaf *lf,
+                         const double p[3])
+{
+    /* p in the arm's plane: u along the arm's bearing, w across it */
+    double u = p[0] * lf->ca + p[1] * lf->sa, w = p[1] * lf->ca - p[0] * lf->sa,
+           w2 = w * w, t, best;
+    best = (sqrt(seg_dist2(u, p[2], 0.0, 0.0, 1.0, 0.0, s->link[0]) + w2) -
+            s->radius[0] - CONTACT_M) *
+           s->inv_speed[0];
+    t = (sqrt(seg_dist2(u, p[2], s->link[0], 0.0, lf->cs, lf->ss, s->link[1]) +
+              w2) -
+         s->radius[1] - CONTACT_M) *
+        s->inv_speed[1];
+    if (t < best)
+        best = t;
+    t = (sqrt(seg_dist2(u, p[2], lf->elbow_u, lf->elbow_z, lf->cp, lf->sp,
+                        s->link[2]) +
+              w2) -
+         s->radius[2] - CONTACT_M) *
+        s->inv_speed[2];
+    return t < best ? t : best;
+}
+
+/* Is p farther than reach[k] from link k at configuration lf, for every
+ * link? (No roots: most points pass this once for their whole window.) */
+static int clear_by(const struct sweep *s, const struct qrt_sweep_leaf *lf,
+                    const double p[3], const double reach[3])
+{
+    double u = p[0] * lf->ca + p[1] * lf->sa, w = p[1] * lf->ca - p[0] * lf->sa,
+           w2 = w * w;
+    return seg_dist2(u, p[2], 0.0, 0.0, 1.0, 0.0, s->link[0]) + w2 >
+               reach[0] * reach[0] &&
+           seg_dist2(u, p[2], s->link[0], 0.0, lf->cs, lf->ss, s->link[1]) +
+                   w2 >
+               reach[1] * reach[1] &&
+           seg_dist2(u, p[2], lf->elbow_u, lf->elbow_z, lf->cp, lf->sp,
+                     s->link[2]) +
+                   w2 >
+               reach[2] * reach[2];
+}
+
+/* Is p clear of the arm for every t in [tl, th]? First in one test from
+ * the stored configuration nearest the middle, each link's radius grown by
+ * how far it can move to either end; else by conservative advancement:
+ * a configuration clear for dt covers t +- dt; the stored one nearest t
+ * serves when it reaches back to t, else the configuration at t itself. */
+static int advance(struct sweep *s, const double p[3], double tl, double th)
+{
+    double t = tl, reach[3], ti, far;
+    long i = (long)(0.5 * (tl + th) * (double)s->n);
+    int steps, k;
+    if (i >= s->n)
+        i = s->n - 1;
+    ti = ((double)i + 0.5) / (double)s->n;
+    far = ti - tl > th - ti ? ti - tl : th - ti;
+    for (k = 0; k < 3; k++)
+        reach[k] = s->radius[k] + CONTACT_M + s->speed[k] * far;
+    if (clear_by(s, &s->leaf[i], p, reach))
+        return 1;
+    for (steps = 0; steps < STEPS_PER_POINT; steps++) {
+        double dt;
+        if (--s->steps_left < 0)
+            return 0;
+        i = (long)(t * (double)s->n);
+        if (i >= s->n)
+            i = s->n - 1;
+        ti = ((double)i + 0.5) / (double)s->n;
+        dt = clear_time(s, &s->leaf[i], p);
+        if (dt > fabs(t - ti)) {
+            t = ti + dt;
+        } else {
+            struct qrt_sweep_leaf here;
+            leaf_at(s, t, &here);
+            dt = clear_time(s, &here, p);
+            if (dt <= 0.0)
+                return 0;
+            t += dt;
+        }
+        if (t >= th)
+            return 1;
+    }
+    return 0;
+}
+
+/* Is p clear of the arm along the whole motion? Only while alpha is near
+ * p's bearing phi (or its opposite) can p be within `wall` of the arm's
+ * plane: rho |sin(phi - alpha)| <= wall, that is phi - alpha within
+ * beta = asin(wall / rho) <= (pi / 2) wall / rho of a multiple of pi. */
+static int point_clear(struct sweep *s, const float q[3])
+{
+    double p[3], rho, beta, d0, lo, hi;
+    long k, k_lo, k_hi;
+    p[0] = q[0];
+    p[1] = q[1];
+    p[2] = q[2];
+    if (s->da == 0.0) { /* the plane stays put */
+        double w = p[1] * s->leaf[0].ca - p[0] * s->leaf[0].sa;
+        return fabs(w) > s->wall || advance(s, p, 0.0, 1.0);
+    }
+    rho = sqrt(p[0] * p[0] + p[1] * p[1]);
+    beta = rho > 0.0 ? 0.5 * QRT_PI * s->wall / rho : QRT_PI;
+    beta += QRT_FAST_ANGLE_ERR + 1e-9; /* the bearing's error, rounding */
+    if (beta >= 0.5 * QRT_PI)          /* the windows would meet */
+        return advance(s, p, 0.0, 1.0);
+    d0 = qrt_fast_atan2(p[1], p[0]) - s->a0; /* in [-2 pi, 2 pi] */
+    lo = s->da < 0.0 ? s->da : 0.0;          /* alpha - a0 on the motion */
+    hi = s->da < 0.0 ? 0.0 : s->da;
+    /* the windows d0 + k pi +- beta that meet [lo, hi] */
+    k_lo = qrt_ceil((lo - beta - d0) / QRT_PI);
+    k_hi = qrt_floor((hi + beta - d0) / QRT_PI);
+    for (k = k_lo; k <= k_hi; k++) {
+        double o = d0 + (double)k * QRT_PI, a = o - beta, b = o + beta, tl, th;
+        if (a < lo)
+            a = lo;
+        if (b > hi)
+            b = hi;
+        if (a > b)
+            continue;
+        tl = a / s->da;
+        th = b / s->da;
+        if (tl > th) {
+            double x = tl;
+            tl = th;
+            th = x;
+        }
+        tl = tl < 1e-12 ? 0.0 : tl - 1e-12;
+        th = th > 1.0 - 1e-12 ? 1.0 : th + 1e-12;
+        if (!advance(s, p, tl, th))
+            return 0;
+    }
+    return 1;
+}
+
+int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
+                   const struct qrt_points *pts, int alpha_wraps,
+                   const double a_deg[3], const double b_deg[3],
+                   struct qrt_sweep_leaf *leaves)
+{
+    const double *l = arm->link_m;
+    struct sweep s;
+    double d[3], *speed = s.speed, fastest;
+    long i;
+    int k;
+    for (k = 0; k < 3; k++)
+        d[k] = b_deg[k] - a_deg[k];
+    if (alpha_wraps)
+        d[0] = qrt_wrap_deg(d[0]);
+    for (k = 0; k < 3; k++) {
+        s.link[k] = l[k];
+        s.radius[k] = radius_m[k];
+    }
+    s.a0 = a_deg[0] * QRT_DEG;
+    s.da = d[0] * QRT_DEG;
+    s.s0 = a_deg[1] * QRT_DEG;
+    s.ds = d[1] * QRT_DEG;
+    s.p0 = (a_deg[1] + a_deg[2]) * QRT_DEG;
+    s.dp = (d[1] + d[2]) * QRT_DEG;
+    speed[0] = fabs(s.da) * l[0];
+    speed[1] = fabs(s.da) * (l[0] + l[1]) + fabs(s.ds) * l[1];
+    speed[2] = fabs(s.da) * (l[0] + l[1] + l[2]) + fabs(s.ds) * (l[1] + l[2]) +
+               fabs(d[2] * QRT_DEG) * l[2];
+    fastest = 0.0;
+    s.wall = 0.0;
+    for (k = 0; k < 3; k++) {
+        s.inv_speed[k] = speed[k] > 0.0 ? 1.0 / speed[k] : 1e30;
+        if (speed[k] > fastest)
+            fastest = speed[k];
+        if (radius_m[k] > s.wall)
+            s.wall = radius_m[k];
+    }
+    s.n = 1;
+    while (s.n < QRT_SWEEP_LEAVES && (double)s.n * LEAF_SPACING_M < fastest)
+        s.n *= 2;
+    s.leaf = leaves;
+    for (i = 0; i < s.n; i++)
+        leaf_at(&s, ((double)i + 0.5) / (double)s.n, &leaves[i]);
+    s.steps_left = STEPS_MEAN * pts->count + STEPS_START;
+    for (i = 0; i < pts->count; i += SAMPLE_STRIDE)
+        if (!point_clear(&s, pts->xyz[i]))
+            return 0;
+    for (i = 0; i < pts->count; i++)
+        if (i % SAMPLE_STRIDE != 0 && !point_clear(&s, pts->xyz[i]))
+            return 0;
+    return 1;
+}

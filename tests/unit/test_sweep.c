@@ -1,0 +1,161 @@
+/* The one-pass proof of a straight motion against the points: every motion
+ * it accepts is free when sampled every 0.1 degrees with the reference arm,
+ * on clouds with points put next to the motion's own sampled
+ * configurations (just inside and just outside a link's radius), across
+ * the alpha seam, with alpha still, and for no motion at all; and it does
+ * prove motions that pass the points with room to spare. Uses the core's
+ * internal sweep.h. */
+#include "../../src/core/sweep.h"
+#include "check.h"
+#include "qrtplan/qrtplan.h"
+#include "ref_arm.h"
+
+static struct qrt_planner pl;
+
+enum { CLOUD = 30 };
+
+static double wrap180(double x)
+{
+    x = fmod(x, 360.0);
+    return x <= -180.0 ? x + 360.0 : (x > 180.0 ? x - 360.0 : x);
+}
+
+/* Samples of the motion a -> b every 0.1 degrees of its largest joint
+ * change, and the configuration at sample k of them. */
+static int samples_of(const double a[3], const double b[3])
+{
+    double span = fmax(fabs(wrap180(b[0] - a[0])),
+                       fmax(fabs(b[1] - a[1]), fabs(b[2] - a[2])));
+    return (int)ceil(span / 0.1) + 1;
+}
+
+static void config_at(const double a[3], const double b[3], int k, int steps,
+                      double q[3])
+{
+    q[0] = a[0] + wrap180(b[0] - a[0]) * k / steps;
+    q[1] = a[1] + (b[1] - a[1]) * k / steps;
+    q[2] = a[2] + (b[2] - a[2]) * k / steps;
+}
+
+/* A point `offset` beyond link k's radius from a random spot on link k at
+ * configuration q, in a random direction away from the link's axis. */
+static void point_near(const double q[3], int k, double radius, double offset,
+                       double x[3])
+{
+    double p[4][3], axis[3], dir[3], s = test_uniform(0.0, 1.0), len, dot;
+    int j;
+    ref_fk(q, p);
+    for (j = 0; j < 3; j++) {
+        axis[j] = p[k + 1][j] - p[k][j];
+        dir[j] = test_uniform(-1.0, 1.0);
+    }
+    len = sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+    dot =
+        (dir[0] * axis[0] + dir[1] * axis[1] + dir[2] * axis[2]) / (len * len);
+    for (j = 0; j < 3; j++) /* across the link: off the axis' direction */
+        dir[j] -= dot * axis[j];
+    len = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    for (j = 0; j < 3; j++)
+        x[j] = p[k][j] + s * axis[j] + dir[j] / len * (radius + offset);
+}
+
+static void random_joints(double q[3])
+{
+    q[0] = test_uniform(-180, 180);
+    q[1] = test_uniform(-40, 180);
+    q[2] = test_uniform(-180, 140);
+}
+
+int main(void)
+{
+    static double cloud[3 * CLOUD], stored[3 * CLOUD];
+    struct qrt_params prm;
+    double radius[3];
+    int trial, k, proved_roomy = 0, roomy = 0, colliding = 0, proved = 0;
+    test_seed(0x5eed5eedULL);
+    qrt_params_default(&prm);
+    for (k = 0; k < 3; k++)
+        radius[k] = prm.arm.link_radius_m[k] + prm.margin_m;
+    CHECK(qrt_planner_init(&pl, &prm) == QRT_OK, "init");
+    for (trial = 0; trial < test_count(1200); trial++) {
+        /* kinds: 0 points anywhere in reach; 1 and 2 one point next to
+         * the motion within 1 cm (2: 3 mm) either way of a link's radius
+         * (so that the answer turns on it alone), the others next to it
+         * with room; 3 all with room */
+        int kind = trial % 4, i, steps, free_here;
+        double a[3], b[3], worst = 1e30;
+        random_joints(a);
+        random_joints(b);
+        if (trial % 10 == 1) { /* across the seam */
+            a[0] = test_uniform(150, 180);
+            b[0] = test_uniform(-180, -150);
+        } else if (trial % 10 == 2) { /* alpha still */
+            b[0] = a[0];
+        } else if (trial % 10 == 3) { /* a short motion */
+            for (k = 0; k < 3; k++)
+                b[k] = a[k] + test_uniform(-3, 3);
+            b[0] = wrap180(b[0]);
+            b[1] = fmin(180, fmax(-40, b[1]));
+            b[2] = fmin(140, fmax(-180, b[2]));
+        } else if (trial % 10 == 4) { /* none at all */
+            for (k = 0; k < 3; k++)
+                b[k] = a[k];
+        }
+        steps = samples_of(a, b);
+        for (i = 0; i < CLOUD; i++) {
+            double *x = cloud + 3 * i;
+            if (kind == 0) {
+                do {
+                    for (k = 0; k < 3; k++)
+                        x[k] = test_uniform(-1.0, 1.0);
+                } while (x[0] * x[0] + x[1] * x[1] + x[2] * x[2] > 1.0);
+            } else {
+                double q[3];
+                int at = (int)test_uniform(0, steps + 1),
+                    link = (i + trial / 4) % 3;
+                if (at > steps)
+                    at = steps;
+                config_at(a, b, at, steps, q);
+                point_near(q, link, radius[link],
+                           kind == 1 && i == 0   ? test_uniform(-0.01, 0.01)
+                           : kind == 2 && i == 0 ? test_uniform(-0.003, 0.003)
+                                                 : test_uniform(0.03, 0.3),
+                           x);
+            }
+        }
+        qrt_points_reset(&pl.points, 10.0);
+        CHECK(qrt_points_add(&pl.points, cloud, CLOUD) == QRT_OK, "add");
+        /* the reference reads the points as stored (floats) */
+        for (i = 0; i < 3 * CLOUD; i++)
+            stored[i] = pl.points.xyz[i / 3][i % 3];
+        for (i = 0; i <= steps; i++) {
+            double q[3];
+            config_at(a, b, i, steps, q);
+            worst = fmin(worst, ref_clearance(q, stored, CLOUD, radius));
+        }
+        free_here = qrt_sweep_free(&prm.arm, radius, &pl.points, 1, a, b,
+                                   pl.search.sweep);
+        proved += free_here;
+        if (free_here)
+            CHECK(worst >= -1e-9,
+                  "proved free, yet clearance %.3g m on a sample: "
+                  "(%.2f %.2f %.2f) -> (%.2f %.2f %.2f), kind %d",
+                  worst, a[0], a[1], a[2], b[0], b[1], b[2], kind);
+        if (worst < 0.0)
+            colliding++;
+        if (worst >= 0.025) {
+            roomy++;
+            proved_roomy += free_here;
+        }
+    }
+    /* the cases must all have occurred, or the checks above proved little */
+    CHECK(colliding > test_count(1200) / 10, "%d colliding motions", colliding);
+    CHECK(roomy > test_count(1200) / 10, "%d motions with room", roomy);
+    CHECK(proved_roomy >= roomy * 9 / 10,
+          "proved only %d of %d motions that pass every point by 2.5 cm",
+          proved_roomy, roomy);
+    printf("proved %d of %d motions; %d of the %d with 2.5 cm to spare; %d "
+           "collide\n",
+           proved, (int)test_count(1200), proved_roomy, roomy, colliding);
+    return test_done("test_sweep");
+}
