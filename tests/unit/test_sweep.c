@@ -2,7 +2,8 @@
  * it accepts is free when sampled every 0.1 degrees with the reference arm,
  * on clouds with points put next to the motion's own sampled
  * configurations (just inside and just outside a link's radius), across
- * the alpha seam, with alpha still, and for no motion at all; and it does
+ * the alpha seam, with alpha still, turning over pi (an alpha that does not
+ * wrap), and for no motion at all; and it does
  * prove motions that pass the points with room to spare. Uses the core's
  * internal sweep.h. */
 #include "../../src/core/sweep.h"
@@ -20,19 +21,25 @@ static double wrap180(double x)
     return x <= -180.0 ? x + 360.0 : (x > 180.0 ? x - 360.0 : x);
 }
 
+/* Alpha's change from a to b: the short way when alpha wraps. */
+static double alpha_turn(const double a[3], const double b[3], int wraps)
+{
+    return wraps ? wrap180(b[0] - a[0]) : b[0] - a[0];
+}
+
 /* Samples of the motion a -> b every 0.1 degrees of its largest joint
  * change, and the configuration at sample k of them. */
-static int samples_of(const double a[3], const double b[3])
+static int samples_of(const double a[3], const double b[3], int wraps)
 {
-    double span = fmax(fabs(wrap180(b[0] - a[0])),
+    double span = fmax(fabs(alpha_turn(a, b, wraps)),
                        fmax(fabs(b[1] - a[1]), fabs(b[2] - a[2])));
     return (int)ceil(span / 0.1) + 1;
 }
 
-static void config_at(const double a[3], const double b[3], int k, int steps,
-                      double q[3])
+static void config_at(const double a[3], const double b[3], int wraps, int k,
+                      int steps, double q[3])
 {
-    q[0] = a[0] + wrap180(b[0] - a[0]) * k / steps;
+    q[0] = a[0] + alpha_turn(a, b, wraps) * k / steps;
     q[1] = a[1] + (b[1] - a[1]) * k / steps;
     q[2] = a[2] + (b[2] - a[2]) * k / steps;
 }
@@ -82,7 +89,7 @@ int main(void)
          * the motion within 1 cm (2: 3 mm) either way of a link's radius
          * (so that the answer turns on it alone), the others next to it
          * with room; 3 all with room */
-        int kind = trial % 4, i, steps, free_here;
+        int kind = trial % 4, i, steps, free_here, wraps = 1;
         double a[3], b[3], worst = 1e30;
         random_joints(a);
         random_joints(b);
@@ -100,8 +107,13 @@ int main(void)
         } else if (trial % 10 == 4) { /* none at all */
             for (k = 0; k < 3; k++)
                 b[k] = a[k];
+        } else if (trial % 10 == 5) { /* an arm whose alpha does not wrap
+                                          turns the long way, over pi */
+            wraps = 0;
+            a[0] = test_uniform(-180, -120);
+            b[0] = test_uniform(120, 180);
         }
-        steps = samples_of(a, b);
+        steps = samples_of(a, b, wraps);
         for (i = 0; i < CLOUD; i++) {
             double *x = cloud + 3 * i;
             if (kind == 0) {
@@ -115,7 +127,7 @@ int main(void)
                     link = (i + trial / 4) % 3;
                 if (at > steps)
                     at = steps;
-                config_at(a, b, at, steps, q);
+                config_at(a, b, wraps, at, steps, q);
                 point_near(q, link, radius[link],
                            kind == 1 && i == 0   ? test_uniform(-0.01, 0.01)
                            : kind == 2 && i == 0 ? test_uniform(-0.003, 0.003)
@@ -130,10 +142,10 @@ int main(void)
             stored[i] = pl.points.xyz[i / 3][i % 3];
         for (i = 0; i <= steps; i++) {
             double q[3];
-            config_at(a, b, i, steps, q);
+            config_at(a, b, wraps, i, steps, q);
             worst = fmin(worst, ref_clearance(q, stored, CLOUD, radius));
         }
-        free_here = qrt_sweep_free(&prm.arm, radius, &pl.points, 1, a, b,
+        free_here = qrt_sweep_free(&prm.arm, radius, &pl.points, wraps, a, b,
                                    pl.search.sweep);
         proved += free_here;
         if (free_here)
