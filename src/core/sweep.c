@@ -29,9 +29,9 @@ struct sweep {
     double a0, da, s0, ds, p0, dp; /* alpha, sigma and sigma + eta, radians:
                                       at t = 0, and their change to t = 1 */
     double radius[3];
-    /* 1 / how fast (metres per unit of t) any point of link k can move:
-     * each joint's rate times the farthest the link reaches from its axis
-     * (huge for a link that does not move) */
+    /* how fast (metres per unit of t) any point of link k can move, each
+     * joint's rate times the farthest the link reaches from its axis; and
+     * its inverse (huge for a link that does not move) */
     double speed[3], inv_speed[3];
     double wall; /* a point farther than this from the arm's plane is clear
                     of every link */
