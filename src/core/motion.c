@@ -16,6 +16,17 @@ void qrt_motion_delta(const struct qrt_lattice *lat, const double a_deg[3],
         d_deg[0] = qrt_wrap_deg(d_deg[0]);
 }
 
+void qrt_motion_link_speeds(const struct qrt_arm *arm, const double d_deg[3],
+                            double speed[3])
+{
+    const double *l = arm->link_m;
+    double a = fabs(d_deg[0]), s = fabs(d_deg[1]), e = fabs(d_deg[2]);
+    speed[0] = a * l[0] * QRT_DEG;
+    speed[1] = (a * (l[0] + l[1]) + s * l[1]) * QRT_DEG;
+    speed[2] =
+        (a * (l[0] + l[1] + l[2]) + s * (l[1] + l[2]) + e * l[2]) * QRT_DEG;
+}
+
 /* The lattice node whose cell holds continuous lattice coordinates x;
  * 0 if that is outside the lattice. */
 static int cell_of(const struct qrt_lattice *lat, const double x[3], int ijk[3])
@@ -239,15 +250,12 @@ int qrt_motion_free_exact(const struct qrt_arm *arm, const double radius_m[3],
                           const double b_deg[3], int max_steps,
                           int witness_after)
 {
-    const double *l = arm->link_m;
-    double d[3], speed, t = 0.0;
+    double d[3], link_speed[3], speed, t = 0.0;
     int step, j;
     qrt_motion_delta(lat, a_deg, b_deg, d);
-    /* No point of the arm moves faster than this (metres per unit t): each
-     * joint's rate times the farthest any arm point is from its axis. */
-    speed = (fabs(d[0]) * (l[0] + l[1] + l[2]) + fabs(d[1]) * (l[1] + l[2]) +
-             fabs(d[2]) * l[2]) *
-            QRT_DEG;
+    /* No point of the arm moves faster than link 3's fastest. */
+    qrt_motion_link_speeds(arm, d, link_speed);
+    speed = link_speed[2];
     for (step = 0; step < max_steps; step++) {
         double q[3], c;
         if (step == witness_after && has_witness(arm, radius_m, pts, a_deg, d))

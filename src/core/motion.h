@@ -13,6 +13,12 @@
 void qrt_motion_delta(const struct qrt_lattice *lat, const double a_deg[3],
                       const double b_deg[3], double d_deg[3]);
 
+/* How fast (metres per unit of the motion's parameter) any point of link k
+ * can move on a straight motion whose joints change by d_deg: each joint's
+ * rate times the farthest link k reaches from that joint's axis. */
+void qrt_motion_link_speeds(const struct qrt_arm *arm, const double d_deg[3],
+                            double speed[3]);
+
 /* 1 if every configuration on the straight motion a -> b lies in the cell
  * of a free lattice node (so collides with nothing), else 0. */
 int qrt_motion_free_on_mask(const struct qrt_mask *mask, const double a_deg[3],

@@ -559,9 +559,8 @@ static int plan_swept(struct qrt_planner *pl, const struct qrt_target *start,
         return 0;
     for (k = 0; k < 3; k++) /* exact_radii, before the mask's radii are set */
         radius[k] = points_radius(pl, k) + shift;
-    if (!qrt_sweep_free(&pl->params.arm, radius, &pl->points,
-                        pl->mask.lat.alpha_wraps, qs[0], qg[0],
-                        pl->search.sweep))
+    if (!qrt_sweep_free(&pl->params.arm, radius, &pl->points, &pl->mask.lat,
+                        qs[0], qg[0], pl->search.sweep))
         return 0;
     reset_plan(pl, plan);
     copy_joints(plan->start_deg, qs[0]);

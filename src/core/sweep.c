@@ -6,6 +6,7 @@
 
 #include "fastmath.h"
 #include "geom.h"
+#include "motion.h"
 
 /* The stored configurations lie about this far apart (metres) for the
  * fastest-moving point of the arm, at most QRT_SWEEP_LEAVES of them: a
@@ -253,21 +254,18 @@ static int point_clear(struct sweep *s, const float q[3])
 }
 
 int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
-                   const struct qrt_points *pts, int alpha_wraps,
+                   const struct qrt_points *pts, const struct qrt_lattice *lat,
                    const double a_deg[3], const double b_deg[3],
                    struct qrt_sweep_leaf *leaves)
 {
-    const double *l = arm->link_m;
     struct sweep s;
-    double d[3], *speed = s.speed, fastest;
+    double d[3], fastest;
     long i;
     int k;
-    for (k = 0; k < 3; k++)
-        d[k] = b_deg[k] - a_deg[k];
-    if (alpha_wraps)
-        d[0] = qrt_wrap_deg(d[0]);
+    qrt_motion_delta(lat, a_deg, b_deg, d);
+    qrt_motion_link_speeds(arm, d, s.speed);
     for (k = 0; k < 3; k++) {
-        s.link[k] = l[k];
+        s.link[k] = arm->link_m[k];
         s.radius[k] = radius_m[k];
     }
     s.a0 = a_deg[0] * QRT_DEG;
@@ -276,16 +274,12 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
     s.ds = d[1] * QRT_DEG;
     s.p0 = (a_deg[1] + a_deg[2]) * QRT_DEG;
     s.dp = (d[1] + d[2]) * QRT_DEG;
-    speed[0] = fabs(s.da) * l[0];
-    speed[1] = fabs(s.da) * (l[0] + l[1]) + fabs(s.ds) * l[1];
-    speed[2] = fabs(s.da) * (l[0] + l[1] + l[2]) + fabs(s.ds) * (l[1] + l[2]) +
-               fabs(d[2] * QRT_DEG) * l[2];
     fastest = 0.0;
     s.wall = 0.0;
     for (k = 0; k < 3; k++) {
-        s.inv_speed[k] = speed[k] > 0.0 ? 1.0 / speed[k] : 1e30;
-        if (speed[k] > fastest)
-            fastest = speed[k];
+        s.inv_speed[k] = s.speed[k] > 0.0 ? 1.0 / s.speed[k] : 1e30;
+        if (s.speed[k] > fastest)
+            fastest = s.speed[k];
         if (radius_m[k] > s.wall)
             s.wall = radius_m[k];
     }
@@ -299,8 +293,8 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
     while (s.n < QRT_SWEEP_LEAVES && (double)s.n * LEAF_SPACING_M < fastest)
         s.n *= 2;
     s.leaf = leaves;
-    store_leaves(&s, leaves);
     s.steps_left = STEPS_MEAN * pts->count + STEPS_START;
+    store_leaves(&s, leaves);
     for (i = 0; i < pts->count; i += SAMPLE_STRIDE)
         if (!point_clear(&s, pts->xyz[i]))
             return 0;

@@ -5,14 +5,15 @@
 #define QRT_CORE_SWEEP_H
 
 #include "qrtplan/arm.h"
+#include "qrtplan/lattice.h"
 #include "qrtplan/planner.h"
 #include "qrtplan/points.h"
 
 /* 1 if every configuration on the straight motion a -> b (alpha the short
- * way when alpha_wraps) keeps every point at least radius_m[k] from link k,
- * so collides with nothing; 0 if that is not proved: the motion collides,
- * or passes too close to some point for this proof (then the mask decides),
- * or the proof would take more than a few steps a point.
+ * way when lat's alpha wraps) keeps every point at least radius_m[k] from link
+ * k, so collides with nothing; 0 if that is not proved: the motion collides, or
+ * passes too close to some point for this proof (then the mask decides), or the
+ * proof would take more than a few steps a point.
  *
  * How: a point can come near the arm only while alpha is within a window of
  * its bearing (the arm lies in a vertical plane through the base axis), and
@@ -20,7 +21,7 @@
  * stored configurations of it (each link's clearance divided by how fast
  * any of its points can move). leaves is scratch for QRT_SWEEP_LEAVES. */
 int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
-                   const struct qrt_points *pts, int alpha_wraps,
+                   const struct qrt_points *pts, const struct qrt_lattice *lat,
                    const double a_deg[3], const double b_deg[3],
                    struct qrt_sweep_leaf *leaves);
 

@@ -77,6 +77,8 @@ int main(void)
 {
     static double cloud[3 * CLOUD], stored[3 * CLOUD];
     struct qrt_params prm;
+    struct qrt_arm short_alpha; /* alpha in [-180, 175]: it does not wrap */
+    struct qrt_lattice lat_wraps, lat_no_wrap;
     double radius[3];
     int trial, k, proved_roomy = 0, roomy = 0, colliding = 0, proved = 0;
     test_seed(0x5eed5eedULL);
@@ -84,6 +86,14 @@ int main(void)
     for (k = 0; k < 3; k++)
         radius[k] = prm.arm.link_radius_m[k] + prm.margin_m;
     CHECK(qrt_planner_init(&pl, &prm) == QRT_OK, "init");
+    short_alpha = prm.arm;
+    short_alpha.limit_deg[0][1] = 175.0;
+    CHECK(qrt_lattice_init(&lat_wraps, &prm.arm, 5.0) == QRT_OK &&
+              lat_wraps.alpha_wraps,
+          "a lattice whose alpha wraps");
+    CHECK(qrt_lattice_init(&lat_no_wrap, &short_alpha, 5.0) == QRT_OK &&
+              !lat_no_wrap.alpha_wraps,
+          "a lattice whose alpha does not wrap");
     for (trial = 0; trial < test_count(1200); trial++) {
         /* kinds: 0 points anywhere in reach; 1 and 2 one point next to
          * the motion within 1 cm (2: 3 mm) either way of a link's radius
@@ -111,7 +121,7 @@ int main(void)
                                           turns the long way, over pi */
             wraps = 0;
             a[0] = test_uniform(-180, -120);
-            b[0] = test_uniform(120, 180);
+            b[0] = test_uniform(120, 175);
         }
         steps = samples_of(a, b, wraps);
         for (i = 0; i < CLOUD; i++) {
@@ -145,7 +155,8 @@ int main(void)
             config_at(a, b, wraps, i, steps, q);
             worst = fmin(worst, ref_clearance(q, stored, CLOUD, radius));
         }
-        free_here = qrt_sweep_free(&prm.arm, radius, &pl.points, wraps, a, b,
+        free_here = qrt_sweep_free(&prm.arm, radius, &pl.points,
+                                   wraps ? &lat_wraps : &lat_no_wrap, a, b,
                                    pl.search.sweep);
         proved += free_here;
         if (free_here)
