@@ -192,14 +192,16 @@ static double cspace_shift_m(const struct qrt_planner *pl)
            (arm_reach(&pl->params.arm) + (l[1] + l[2]) + l[2]);
 }
 
-/* Collision radii for checks against the raw points, once the mask's
- * radii are set for them. */
+/* Collision radii for checks against the points now in the table: the
+ * mask's radii for them (the same sums, so the same values wherever a mask
+ * is built or being built for these points) plus the C-space shift; known
+ * before any mask is. */
 static void exact_radii(const struct qrt_planner *pl, double radius[3])
 {
     double shift = cspace_shift_m(pl);
     int k;
     for (k = 0; k < 3; k++)
-        radius[k] = pl->radius_m[k] + shift;
+        radius[k] = points_radius(pl, k) + shift;
 }
 
 static int node_blocked(void *ctx, const int ijk[3])
@@ -548,8 +550,7 @@ static int plan_swept(struct qrt_planner *pl, const struct qrt_target *start,
                       const struct qrt_target *goal, struct qrt_plan *plan)
 {
     static const double origin[3] = {0.0, 0.0, 0.0};
-    double qs[4][3], qg[4][3], radius[3], shift = cspace_shift_m(pl);
-    int k;
+    double qs[4][3], qg[4][3], radius[3];
     if (!pl->params.simplify || pl->points.dropped > 0)
         return 0;
     if (end_joints(pl, start,
@@ -557,8 +558,7 @@ static int plan_swept(struct qrt_planner *pl, const struct qrt_target *start,
                    qs) == 0 ||
         end_joints(pl, goal, qs[0], qg) == 0)
         return 0;
-    for (k = 0; k < 3; k++) /* exact_radii, before the mask's radii are set */
-        radius[k] = points_radius(pl, k) + shift;
+    exact_radii(pl, radius);
     if (!qrt_sweep_free(&pl->params.arm, radius, &pl->points, &pl->mask.lat,
                         qs[0], qg[0], pl->search.sweep))
         return 0;
