@@ -8,6 +8,7 @@
 
 #include <math.h>
 
+#include "bits.h"
 #include "geom.h"
 #include "lazy.h"
 #include "mask_bit.h"
@@ -126,29 +127,19 @@ static void push_or_lower(struct qrt_planner *pl, long *size, long node,
 }
 
 /* Length of the shortest obstacle-free 26-neighbour path, in cells: the
- * consistent A* estimate. */
-static double octile(int da, int ds, int de)
+ * consistent A* estimate. The steps are sorted by taking the least and the
+ * greatest (selects, no branches); the sum is written as it always was, so
+ * that every key keeps its bits. */
+static inline double octile(int da, int ds, int de)
 {
-    int t;
-    if (da < ds) {
-        t = da;
-        da = ds;
-        ds = t;
-    }
-    if (ds < de) {
-        t = ds;
-        ds = de;
-        de = t;
-    }
-    if (da < ds) {
-        t = da;
-        da = ds;
-        ds = t;
-    }
-    return sqrt(3.0) * de + sqrt(2.0) * (ds - de) + (double)(da - ds);
+    int lo = da < ds ? da : ds, hi = da < ds ? ds : da, mid;
+    lo = de < lo ? de : lo;
+    hi = de > hi ? de : hi;
+    mid = da + ds + de - lo - hi;
+    return sqrt(3.0) * lo + sqrt(2.0) * (mid - lo) + (double)(hi - mid);
 }
 
-static int axis_gap(const struct qrt_lattice *lat, int j, int a, int b)
+static inline int axis_gap(const struct qrt_lattice *lat, int j, int a, int b)
 {
     int d = a > b ? a - b : b - a;
     if (j == 0 && lat->alpha_wraps && lat->n[0] - d < d)
@@ -165,8 +156,8 @@ struct estimate {
     const struct qrt_goal_region *region;
 };
 
-static double octile_to(const struct qrt_lattice *lat, const int ijk[3], int a,
-                        int s, int e)
+static inline double octile_to(const struct qrt_lattice *lat, const int ijk[3],
+                               int a, int s, int e)
 {
     return lat->grid_deg * octile(axis_gap(lat, 0, ijk[0], a),
                                   axis_gap(lat, 1, ijk[1], s),
@@ -230,9 +221,9 @@ double qrt_goal_region_estimate(const struct qrt_planner *pl, const int ijk[3])
                            qrt_lattice_index(&pl->mask.lat, ijk));
 }
 
-static double estimate_at(const struct estimate *est,
-                          const struct qrt_lattice *lat, const int ijk[3],
-                          long node)
+static inline double estimate_at(const struct estimate *est,
+                                 const struct qrt_lattice *lat,
+                                 const int ijk[3], long node)
 {
     double h;
     if (!est->active)
@@ -301,27 +292,53 @@ static long neighbour(const struct qrt_lattice *lat, const int ijk[3],
 }
 
 /* The lattice's 26 moves: offsets, index deltas (valid off every face)
- * and costs. Small types: the search's frame lies under every row build
- * (stack budget). */
+ * and costs, and for each axis and sign the moves that step that way on
+ * it (bit d of toward[axis][sign > 0]). Small types: the search's frame
+ * lies under every row build (stack budget). */
 struct moves {
     float cost[26];
     int32_t delta[26];
+    uint32_t toward[3][2];
     signed char offset[26][3];
 };
 
 static void init_moves(const struct qrt_lattice *lat, struct moves *mv)
 {
-    int d;
+    int d, j;
+    for (j = 0; j < 3; j++)
+        mv->toward[j][0] = mv->toward[j][1] = 0;
     for (d = 0; d < 26; d++) {
-        int off[3], moved, j;
+        int off[3], moved;
         qrt_search_direction(d, off);
-        for (j = 0; j < 3; j++)
+        for (j = 0; j < 3; j++) {
             mv->offset[d][j] = (signed char)off[j];
+            if (off[j] != 0)
+                mv->toward[j][off[j] > 0] |= 1UL << d;
+        }
         moved = (off[0] != 0) + (off[1] != 0) + (off[2] != 0);
         mv->cost[d] = (float)(lat->grid_deg * sqrt((double)moved));
         mv->delta[d] =
             (int32_t)(((long)off[0] * lat->n[1] + off[1]) * lat->n[2] + off[2]);
     }
+}
+
+/* The moves out of a node reached by move `came` that can lower a cost:
+ * those that leave its parent's neighbourhood, stepping on some axis the
+ * way `came` stepped. Every other neighbour v is also one of the parent's,
+ * and the parent, expanded with its final cost, offered v a cost less by
+ * at least 2 - sqrt(3) steps (one move of at most sqrt 3 against two of at
+ * least 1 each), which float rounding is far too small to undo: a
+ * relaxation through this node would be refused, so it is not tried. */
+static uint32_t moves_after(const struct moves *mv, unsigned came)
+{
+    uint32_t out = 0;
+    int j;
+    if (came == QRT_NO_PARENT)
+        return (1UL << 26) - 1U;
+    for (j = 0; j < 3; j++)
+        if (mv->offset[came][j] != 0)
+            out |= mv->toward[j][mv->offset[came][j] > 0];
+    return out;
 }
 
 /* One best-first search from seeds. With goals, it ends when nothing left
@@ -361,6 +378,7 @@ static void search_from(struct qrt_planner *pl, const struct moves *mv,
         struct qrt_heap_entry top = pl->open.heap[0];
         long u = top.node;
         int ijk[3], slot, d;
+        uint32_t todo;
         if ((double)top.key >= best)
             break; /* nothing left on the heap can beat the best goal */
         pl->heap_pos[u] = -2;
@@ -394,12 +412,14 @@ static void search_from(struct qrt_planner *pl, const struct moves *mv,
          * its index is an offset from u */
         inside = ijk[0] > 0 && ijk[0] < lat->n[0] - 1 && ijk[1] > 0 &&
                  ijk[1] < lat->n[1] - 1 && ijk[2] > 0 && ijk[2] < lat->n[2] - 1;
-        for (d = 0; d < 26; d++) {
+        for (todo = moves_after(mv, pl->parent_dir[u]); todo != 0;
+             todo &= todo - 1U) {
             int nb[3];
             int32_t place;
             long v;
             float g;
             double key;
+            d = qrt_lowest_bit(todo);
             if (inside) {
                 nb[0] = ijk[0] + mv->offset[d][0];
                 nb[1] = ijk[1] + mv->offset[d][1];
