@@ -324,11 +324,13 @@ static void init_moves(const struct qrt_lattice *lat, struct moves *mv)
 
 /* The moves out of a node reached by move `came` that can lower a cost:
  * those that leave its parent's neighbourhood, stepping on some axis the
- * way `came` stepped. Every other neighbour v is also one of the parent's,
- * and the parent, expanded with its final cost, offered v a cost less by
- * at least 2 - sqrt(3) steps (one move of at most sqrt 3 against two of at
- * least 1 each), which float rounding is far too small to undo: a
- * relaxation through this node would be refused, so it is not tried. */
+ * way `came` stepped. Every other neighbour v is also one of the parent's.
+ * The parent, expanded (and closed) with the cost this node's was made
+ * from, offered v a cost less by at least 2 - sqrt(3) steps (one move of
+ * at most sqrt 3 against two of at least 1 each), or, where it did not try
+ * v, its own parent offered less still. Float rounding is far too small to
+ * undo that gap: a relaxation through this node would be refused, so it is
+ * not tried. */
 static uint32_t moves_after(const struct moves *mv, unsigned came)
 {
     uint32_t out = 0;
