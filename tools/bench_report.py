@@ -56,8 +56,8 @@ def main(argv):
     a1.legend(fontsize=7)
     for i, n in enumerate(spheres):
         if n in (1, 3, 10):
-            a2.plot(points, paper[i], "--o", ms=3, label=f"paper, {n} spheres")
-            a2.plot(points, ours[i], "-o", ms=3, label=f"qrtplan, {n} spheres")
+            a2.plot(points, paper[i], "--o", ms=3, label=f"paper, {n} sphere{'s' if n > 1 else ''}")
+            a2.plot(points, ours[i], "-o", ms=3, label=f"qrtplan, {n} sphere{'s' if n > 1 else ''}")
     big = [r for r in rows if not r["paper_s"]]
     if big:
         a2.plot([int(r["points_per_sphere"]) for r in big],
@@ -94,9 +94,10 @@ def main(argv):
     ax[1].set_xlabel("number of spheres")
     ax[1].set_ylabel("free lattice nodes")
     ax[1].set_title("Free nodes vs obstacles (paper Fig. 24)")
-    ax[2].scatter([int(r["nodes_expanded"]) for r in grid],
-                  [float(r["search_ms"]) for r in grid], s=10,
-                  c=[int(r["spheres"]) for r in grid], cmap="viridis")
+    dots = ax[2].scatter([int(r["nodes_expanded"]) for r in grid],
+                         [float(r["search_ms"]) for r in grid], s=10,
+                         c=[int(r["spheres"]) for r in grid], cmap="viridis")
+    fig.colorbar(dots, ax=ax[2], label="spheres")
     ax[2].set_xlabel("nodes expanded by the search")
     ax[2].set_ylabel("search + shortcut time (ms)")
     ax[2].set_title("Search time vs nodes (paper Figs. 25-26)")
