@@ -56,8 +56,9 @@ def main(argv):
     a1.legend(fontsize=7)
     for i, n in enumerate(spheres):
         if n in (1, 3, 10):
-            a2.plot(points, paper[i], "--o", ms=3, label=f"paper, {n} sphere{'s' if n > 1 else ''}")
-            a2.plot(points, ours[i], "-o", ms=3, label=f"qrtplan, {n} sphere{'s' if n > 1 else ''}")
+            many = f"{n} sphere" + ("s" if n > 1 else "")
+            a2.plot(points, paper[i], "--o", ms=3, label=f"paper, {many}")
+            a2.plot(points, ours[i], "-o", ms=3, label=f"qrtplan, {many}")
     big = [r for r in rows if not r["paper_s"]]
     if big:
         a2.plot([int(r["points_per_sphere"]) for r in big],
