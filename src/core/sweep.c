@@ -24,6 +24,15 @@
 /* Every 16th point is tried first: a motion is seldom blocked by one
  * point alone, so a blocked one is usually told from a sample. */
 #define SAMPLE_STRIDE 16
+/* Points near the sweep, taken in the table's order, are tried first as
+ * runs of this many (then as half runs) by one ball that holds them all:
+ * a scan's points lie in its order along surfaces, so such a run is often
+ * a small patch that clears the arm as a whole. A ball wider than
+ * RUN_BALL_M is not tried; a ball's proof takes at most RUN_STEPS steps
+ * (a run that brushes past the arm is quicker told point by point). */
+#define RUN_POINTS 8
+#define RUN_BALL_M 0.3
+#define RUN_STEPS 32
 
 struct sweep {
     double link[3];
@@ -44,6 +53,7 @@ struct sweep {
     long n; /* stored configurations, at t = (i + 0.5) / n */
     struct qrt_sweep_leaf *leaf;
     long steps_left;
+    int max_steps; /* for one point or ball */
 };
 
 static void leaf_at(const struct sweep *s, double t, struct qrt_sweep_leaf *lf)
@@ -168,7 +178,7 @@ static int advance(struct sweep *s, const double p[3], double tl, double th)
         reach[k] = s->radius[k] + CONTACT_M + s->speed[k] * far;
     if (clear_by(s, &s->leaf[i], p, reach))
         return 1;
-    for (steps = 0; steps < STEPS_PER_POINT; steps++) {
+    for (steps = 0; steps < s->max_steps; steps++) {
         double dt;
         if (--s->steps_left < 0)
             return 0;
@@ -193,28 +203,30 @@ static int advance(struct sweep *s, const double p[3], double tl, double th)
     return 0;
 }
 
+/* Is p farther than `wall` from the arm's plane all along the motion, by
+ * the plane's two ends alone? |w| = rho |sin(phi - alpha)| is concave in
+ * alpha between its zeros, which lie pi apart: on a turn shorter than pi,
+ * the same sign at both ends means no zero between them, and the least |w|
+ * at an end. Most points off the sweep leave here. */
+static int off_sweep(const struct sweep *s, const float q[3])
+{
+    double w0, w1;
+    if (!s->edges_ok)
+        return 0;
+    w0 = (double)q[0] * s->n0[0] + (double)q[1] * s->n0[1];
+    w1 = (double)q[0] * s->n1[0] + (double)q[1] * s->n1[1];
+    return (w0 > s->edge_wall && w1 > s->edge_wall) ||
+           (w0 < -s->edge_wall && w1 < -s->edge_wall);
+}
+
 /* Is p clear of the arm along the whole motion? Only while alpha is near
  * p's bearing phi (or its opposite) can p be within `wall` of the arm's
  * plane: rho |sin(phi - alpha)| <= wall, that is phi - alpha within
  * beta = asin(wall / rho) <= (pi / 2) wall / rho of a multiple of pi. */
-static int point_clear(struct sweep *s, const float q[3])
+static int near_clear(struct sweep *s, const double p[3])
 {
-    double p[3], rho, beta, d0, lo, hi;
+    double rho, beta, d0, lo, hi;
     long k, k_lo, k_hi;
-    p[0] = q[0];
-    p[1] = q[1];
-    p[2] = q[2];
-    if (s->edges_ok) {
-        /* |w| = rho |sin(phi - alpha)| is concave in alpha between its
-         * zeros, which lie pi apart: on a turn shorter than pi, the same
-         * sign at both ends means no zero between them, and the least |w|
-         * at an end. Most points off the sweep leave here. */
-        double w0 = p[0] * s->n0[0] + p[1] * s->n0[1],
-               w1 = p[0] * s->n1[0] + p[1] * s->n1[1];
-        if ((w0 > s->edge_wall && w1 > s->edge_wall) ||
-            (w0 < -s->edge_wall && w1 < -s->edge_wall))
-            return 1;
-    }
     if (s->da == 0.0) { /* the plane stays put */
         double w = p[1] * s->leaf[0].ca - p[0] * s->leaf[0].sa;
         return fabs(w) > s->wall || advance(s, p, 0.0, 1.0);
@@ -253,15 +265,84 @@ static int point_clear(struct sweep *s, const float q[3])
     return 1;
 }
 
+static int point_clear(struct sweep *s, const float q[3])
+{
+    double p[3];
+    p[0] = q[0];
+    p[1] = q[1];
+    p[2] = q[2];
+    return off_sweep(s, q) || near_clear(s, p);
+}
+
+/* Are points xyz[run[0..n-1]] clear of the arm all along the motion, as
+ * one ball about their box's centre? No when the ball is wider than
+ * RUN_BALL_M. A point within r of the centre c comes no closer to a link
+ * than c comes less r, so c kept farther than radius + r from every link
+ * keeps every member farther than radius. */
+static int ball_clear(const struct sweep *s, struct sweep *ball,
+                      const float (*xyz)[3], const long *run, int n)
+{
+    float lo[3], hi[3];
+    double c[3], r2 = 0.0, r;
+    int i, k;
+    for (k = 0; k < 3; k++)
+        lo[k] = hi[k] = xyz[run[0]][k];
+    for (i = 1; i < n; i++)
+        for (k = 0; k < 3; k++) {
+            float v = xyz[run[i]][k];
+            lo[k] = v < lo[k] ? v : lo[k];
+            hi[k] = v > hi[k] ? v : hi[k];
+        }
+    /* c and r round off by under 2^-52 |c|: the 1e-12 m added covers that
+     * within 1 km of the base, and no link comes near a ball farther out */
+    for (k = 0; k < 3; k++) {
+        double half = 0.5 * ((double)hi[k] - (double)lo[k]);
+        c[k] = 0.5 * ((double)lo[k] + (double)hi[k]);
+        r2 += half * half;
+    }
+    r = sqrt(r2) * (1.0 + 1e-12) + 1e-12;
+    if (r > RUN_BALL_M)
+        return 0;
+    for (k = 0; k < 3; k++)
+        ball->radius[k] = s->radius[k] + r;
+    ball->wall = s->wall + r;
+    return near_clear(ball, c);
+}
+
+/* Points xyz[run[0..n-1]], none off the sweep by its ends: as one ball,
+ * else as two half runs, else one by one. */
+static int run_clear(struct sweep *s, struct sweep *ball, const float (*xyz)[3],
+                     const long *run, int n)
+{
+    int half, h, i;
+    if (n > 1 && ball_clear(s, ball, xyz, run, n))
+        return 1;
+    for (h = 0; h < n; h += half) {
+        half = n - h < RUN_POINTS / 2 ? n - h : RUN_POINTS / 2;
+        if (half > 1 && n > RUN_POINTS / 2 &&
+            ball_clear(s, ball, xyz, run + h, half))
+            continue;
+        for (i = h; i < h + half; i++) {
+            double p[3];
+            p[0] = xyz[run[i]][0];
+            p[1] = xyz[run[i]][1];
+            p[2] = xyz[run[i]][2];
+            if (!near_clear(s, p))
+                return 0;
+        }
+    }
+    return 1;
+}
+
 int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
                    const struct qrt_points *pts, const struct qrt_lattice *lat,
                    const double a_deg[3], const double b_deg[3],
                    struct qrt_sweep_leaf *leaves)
 {
-    struct sweep s;
+    struct sweep s, ball;
     double d[3], fastest;
-    long i;
-    int k;
+    long i, run[RUN_POINTS];
+    int k, n = 0;
     qrt_motion_delta(lat, a_deg, b_deg, d);
     qrt_motion_link_speeds(arm, d, s.speed);
     for (k = 0; k < 3; k++) {
@@ -294,12 +375,24 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
         s.n *= 2;
     s.leaf = leaves;
     s.steps_left = STEPS_MEAN * pts->count + STEPS_START;
+    s.max_steps = STEPS_PER_POINT;
     store_leaves(&s, leaves);
     for (i = 0; i < pts->count; i += SAMPLE_STRIDE)
         if (!point_clear(&s, pts->xyz[i]))
             return 0;
-    for (i = 0; i < pts->count; i++)
-        if (i % SAMPLE_STRIDE != 0 && !point_clear(&s, pts->xyz[i]))
-            return 0;
-    return 1;
+    /* the balls' steps are counted apart: they only save work */
+    ball = s;
+    ball.max_steps = RUN_STEPS;
+    ball.steps_left = STEPS_MEAN * pts->count + STEPS_START;
+    for (i = 0; i < pts->count; i++) {
+        if (i % SAMPLE_STRIDE == 0 || off_sweep(&s, pts->xyz[i]))
+            continue;
+        run[n++] = i;
+        if (n == RUN_POINTS) {
+            if (!run_clear(&s, &ball, pts->xyz, run, n))
+                return 0;
+            n = 0;
+        }
+    }
+    return run_clear(&s, &ball, pts->xyz, run, n);
 }

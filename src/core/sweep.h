@@ -19,7 +19,11 @@
  * its bearing (the arm lies in a vertical plane through the base axis), and
  * inside that window it is advanced conservatively along the motion from
  * stored configurations of it (each link's clearance divided by how fast
- * any of its points can move). leaves is scratch for QRT_SWEEP_LEAVES. */
+ * any of its points can move). Points near the sweep are taken in the
+ * table's order as runs of 8, each first as one ball that holds them (the
+ * links' radii grown by the ball's), then as two half runs, then alone: a
+ * scan lists its points along surfaces, so a run is mostly a small patch.
+ * leaves is scratch for QRT_SWEEP_LEAVES. */
 int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
                    const struct qrt_points *pts, const struct qrt_lattice *lat,
                    const double a_deg[3], const double b_deg[3],

@@ -1,7 +1,9 @@
 /* The one-pass proof of a straight motion against the points: every motion
  * it accepts is free when sampled every 0.1 degrees with the reference arm,
  * on clouds with points put next to the motion's own sampled
- * configurations (just inside and just outside a link's radius), across
+ * configurations (just inside and just outside a link's radius) and with
+ * patches of 8 points, one centred 0 to 4 cm beyond a link (the runs the
+ * proof takes by one ball), across
  * the alpha seam, with alpha still, turning over pi (an alpha that does not
  * wrap), and for no motion at all; and it does
  * prove motions that pass the points with room to spare. Uses the core's
@@ -81,6 +83,7 @@ int main(void)
     struct qrt_lattice lat_wraps, lat_no_wrap;
     double radius[3];
     int trial, k, proved_roomy = 0, roomy = 0, colliding = 0, proved = 0;
+    int patches_colliding = 0, patches_proved = 0;
     test_seed(0x5eed5eedULL);
     qrt_params_default(&prm);
     for (k = 0; k < 3; k++)
@@ -98,8 +101,12 @@ int main(void)
         /* kinds: 0 points anywhere in reach; 1 and 2 one point next to
          * the motion within 1 cm (2: 3 mm) either way of a link's radius
          * (so that the answer turns on it alone), the others next to it
-         * with room; 3 all with room */
-        int kind = trial % 4, i, steps, free_here, wraps = 1;
+         * with room; 3 all with room; 4 patches of 8 points (a scan's
+         * surfaces, which the proof takes as runs by one ball each): the
+         * first with its centre 0 to 4 cm beyond a link's radius and its
+         * points up to 3 cm off the centre, the others with room */
+        int kind = trial % 5, i, steps, free_here, wraps = 1;
+        double centre[3];
         double a[3], b[3], worst = 1e30;
         random_joints(a);
         random_joints(b);
@@ -131,6 +138,26 @@ int main(void)
                     for (k = 0; k < 3; k++)
                         x[k] = test_uniform(-1.0, 1.0);
                 } while (x[0] * x[0] + x[1] * x[1] + x[2] * x[2] > 1.0);
+            } else if (kind == 4 && i > 0) {
+                /* point 0 is alone; patches from 1 on, so that none holds
+                 * a point the proof tries first alone (every 16th) */
+                double q[3], d[3], len;
+                if ((i - 1) % 8 == 0) {
+                    int at = (int)test_uniform(0, steps + 1);
+                    config_at(a, b, wraps, at > steps ? steps : at, steps, q);
+                    point_near(q, (i / 8 + trial / 5) % 3,
+                               radius[(i / 8 + trial / 5) % 3],
+                               i == 1 ? test_uniform(0.0, 0.04)
+                                      : test_uniform(0.1, 0.3),
+                               centre);
+                }
+                do {
+                    for (k = 0; k < 3; k++)
+                        d[k] = test_uniform(-0.03, 0.03);
+                    len = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                } while (len > 0.03 * 0.03);
+                for (k = 0; k < 3; k++)
+                    x[k] = centre[k] + d[k];
             } else {
                 double q[3];
                 int at = (int)test_uniform(0, steps + 1),
@@ -166,6 +193,10 @@ int main(void)
                   worst, a[0], a[1], a[2], b[0], b[1], b[2], kind);
         if (worst < 0.0)
             colliding++;
+        if (kind == 4) {
+            patches_colliding += worst < 0.0;
+            patches_proved += free_here;
+        }
         if (worst >= 0.025) {
             roomy++;
             proved_roomy += free_here;
@@ -174,11 +205,16 @@ int main(void)
     /* the cases must all have occurred, or the checks above proved little */
     CHECK(colliding > test_count(1200) / 10, "%d colliding motions", colliding);
     CHECK(roomy > test_count(1200) / 10, "%d motions with room", roomy);
+    CHECK(patches_colliding > test_count(1200) / 50 &&
+              patches_proved > test_count(1200) / 50,
+          "patches: %d colliding, %d proved", patches_colliding,
+          patches_proved);
     CHECK(proved_roomy >= roomy * 9 / 10,
           "proved only %d of %d motions that pass every point by 2.5 cm",
           proved_roomy, roomy);
     printf("proved %d of %d motions; %d of the %d with 2.5 cm to spare; %d "
-           "collide\n",
-           proved, (int)test_count(1200), proved_roomy, roomy, colliding);
+           "collide; patches: %d collide, %d proved\n",
+           proved, (int)test_count(1200), proved_roomy, roomy, colliding,
+           patches_colliding, patches_proved);
     return test_done("test_sweep");
 }
