@@ -54,6 +54,7 @@ struct sweep {
     struct qrt_sweep_leaf *leaf;
     long steps_left;
     int max_steps; /* for one point or ball */
+    long balls_cleared, balls_failed;
 };
 
 static void leaf_at(const struct sweep *s, double t, struct qrt_sweep_leaf *lf)
@@ -274,55 +275,88 @@ static int point_clear(struct sweep *s, const float q[3])
     return off_sweep(s, q) || near_clear(s, p);
 }
 
-/* Are points xyz[run[0..n-1]] clear of the arm all along the motion, as
- * one ball about their box's centre? No when the ball is wider than
- * RUN_BALL_M. A point within r of the centre c comes no closer to a link
- * than c comes less r, so c kept farther than radius + r from every link
- * keeps every member farther than radius. */
-static int ball_clear(const struct sweep *s, struct sweep *ball,
-                      const float (*xyz)[3], const long *run, int n)
-{
+/* The box of points xyz[run[0..n-1]], n >= 1. */
+struct box {
     float lo[3], hi[3];
-    double c[3], r2 = 0.0, r;
+};
+
+static void box_of(const float (*xyz)[3], const long *run, int n, struct box *b)
+{
     int i, k;
     for (k = 0; k < 3; k++)
-        lo[k] = hi[k] = xyz[run[0]][k];
+        b->lo[k] = b->hi[k] = xyz[run[0]][k];
     for (i = 1; i < n; i++)
         for (k = 0; k < 3; k++) {
             float v = xyz[run[i]][k];
-            lo[k] = v < lo[k] ? v : lo[k];
-            hi[k] = v > hi[k] ? v : hi[k];
+            b->lo[k] = v < b->lo[k] ? v : b->lo[k];
+            b->hi[k] = v > b->hi[k] ? v : b->hi[k];
         }
+}
+
+/* Are the points in box b clear of the arm all along the motion, as one
+ * ball about its centre? No when the ball is wider than RUN_BALL_M. A point
+ * within r of the centre c comes no closer to a link than c comes less r,
+ * so c kept farther than radius + r from every link keeps every member
+ * farther than radius. */
+static int ball_clear(const struct sweep *s, struct sweep *ball,
+                      const struct box *b)
+{
+    double c[3], r2 = 0.0, r;
+    int k;
     /* c and r round off by under 2^-52 |c|: the 1e-12 m added covers that
      * within 1 km of the base, and no link comes near a ball farther out */
     for (k = 0; k < 3; k++) {
-        double half = 0.5 * ((double)hi[k] - (double)lo[k]);
-        c[k] = 0.5 * ((double)lo[k] + (double)hi[k]);
+        double half = 0.5 * ((double)b->hi[k] - (double)b->lo[k]);
+        c[k] = 0.5 * ((double)b->lo[k] + (double)b->hi[k]);
         r2 += half * half;
     }
     r = sqrt(r2) * (1.0 + 1e-12) + 1e-12;
-    if (r > RUN_BALL_M)
-        return 0;
-    for (k = 0; k < 3; k++)
-        ball->radius[k] = s->radius[k] + r;
-    ball->wall = s->wall + r;
-    return near_clear(ball, c);
+    if (r <= RUN_BALL_M) {
+        for (k = 0; k < 3; k++)
+            ball->radius[k] = s->radius[k] + r;
+        ball->wall = s->wall + r;
+        if (near_clear(ball, c)) {
+            ball->balls_cleared++;
+            return 1;
+        }
+    }
+    ball->balls_failed++;
+    return 0;
 }
 
 /* Points xyz[run[0..n-1]], none off the sweep by its ends: as one ball,
- * else as two half runs, else one by one. */
+ * else as two half runs, else one by one. Balls are tried while they clear
+ * at least a third of the time (and on every 16th run, so that a scene
+ * whose first runs were wide can come back to them): in a table with no
+ * order in space their boxes are only cost. */
 static int run_clear(struct sweep *s, struct sweep *ball, const float (*xyz)[3],
-                     const long *run, int n)
+                     const long *run, int n, long runs)
 {
-    int half, h, i;
-    if (n > 1 && ball_clear(s, ball, xyz, run, n))
-        return 1;
-    for (h = 0; h < n; h += half) {
-        half = n - h < RUN_POINTS / 2 ? n - h : RUN_POINTS / 2;
-        if (half > 1 && n > RUN_POINTS / 2 &&
-            ball_clear(s, ball, xyz, run + h, half))
+    struct box part[2], whole;
+    int halves = n > RUN_POINTS / 2, h, i, k;
+    int balls =
+        ball->balls_failed <= 2 * ball->balls_cleared + 16 || runs % 16 == 0;
+    if (balls && n > 1) {
+        box_of(xyz, run, halves ? RUN_POINTS / 2 : n, &part[0]);
+        whole = part[0];
+        if (halves) {
+            box_of(xyz, run + RUN_POINTS / 2, n - RUN_POINTS / 2, &part[1]);
+            for (k = 0; k < 3; k++) {
+                whole.lo[k] =
+                    part[1].lo[k] < whole.lo[k] ? part[1].lo[k] : whole.lo[k];
+                whole.hi[k] =
+                    part[1].hi[k] > whole.hi[k] ? part[1].hi[k] : whole.hi[k];
+            }
+        }
+        if (ball_clear(s, ball, &whole))
+            return 1;
+    }
+    for (h = 0; h < (halves ? 2 : 1); h++) {
+        int first = h * (RUN_POINTS / 2),
+            end = halves && h == 0 ? RUN_POINTS / 2 : n;
+        if (balls && halves && end - first > 1 && ball_clear(s, ball, &part[h]))
             continue;
-        for (i = h; i < h + half; i++) {
+        for (i = first; i < end; i++) {
             double p[3];
             p[0] = xyz[run[i]][0];
             p[1] = xyz[run[i]][1];
@@ -341,7 +375,7 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
 {
     struct sweep s, ball;
     double d[3], fastest;
-    long i, run[RUN_POINTS];
+    long i, run[RUN_POINTS], runs = 0;
     int k, n = 0;
     qrt_motion_delta(lat, a_deg, b_deg, d);
     qrt_motion_link_speeds(arm, d, s.speed);
@@ -384,15 +418,16 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
     ball = s;
     ball.max_steps = RUN_STEPS;
     ball.steps_left = STEPS_MEAN * pts->count + STEPS_START;
+    ball.balls_cleared = ball.balls_failed = 0;
     for (i = 0; i < pts->count; i++) {
         if (i % SAMPLE_STRIDE == 0 || off_sweep(&s, pts->xyz[i]))
             continue;
         run[n++] = i;
         if (n == RUN_POINTS) {
-            if (!run_clear(&s, &ball, pts->xyz, run, n))
+            if (!run_clear(&s, &ball, pts->xyz, run, n, runs++))
                 return 0;
             n = 0;
         }
     }
-    return run_clear(&s, &ball, pts->xyz, run, n);
+    return n == 0 || run_clear(&s, &ball, pts->xyz, run, n, runs);
 }

@@ -46,16 +46,17 @@ static void config_at(const double a[3], const double b[3], int wraps, int k,
     q[2] = a[2] + (b[2] - a[2]) * k / steps;
 }
 
-/* A point `offset` beyond link k's radius from a random spot on link k at
- * configuration q, in a random direction away from the link's axis. */
-static void point_near(const double q[3], int k, double radius, double offset,
-                       double x[3])
+/* A random spot on link k at configuration q, and a random unit direction
+ * from it away from the link's axis. */
+static void ray_from_link(const double q[3], int k, double spot[3],
+                          double dir[3])
 {
-    double p[4][3], axis[3], dir[3], s = test_uniform(0.0, 1.0), len, dot;
+    double p[4][3], axis[3], s = test_uniform(0.0, 1.0), len, dot;
     int j;
     ref_fk(q, p);
     for (j = 0; j < 3; j++) {
         axis[j] = p[k + 1][j] - p[k][j];
+        spot[j] = p[k][j] + s * axis[j];
         dir[j] = test_uniform(-1.0, 1.0);
     }
     len = sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
@@ -65,7 +66,32 @@ static void point_near(const double q[3], int k, double radius, double offset,
         dir[j] -= dot * axis[j];
     len = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
     for (j = 0; j < 3; j++)
-        x[j] = p[k][j] + s * axis[j] + dir[j] / len * (radius + offset);
+        dir[j] /= len;
+}
+
+/* A point `offset` beyond link k's radius from a random spot on link k at
+ * configuration q, in a random direction away from the link's axis. */
+static void point_near(const double q[3], int k, double radius, double offset,
+                       double x[3])
+{
+    double spot[3], dir[3];
+    int j;
+    ray_from_link(q, k, spot, dir);
+    for (j = 0; j < 3; j++)
+        x[j] = spot[j] + dir[j] * (radius + offset);
+}
+
+/* x within `spread` (a ball) of c. */
+static void jitter(const double c[3], double spread, double x[3])
+{
+    double d[3];
+    int k;
+    do {
+        for (k = 0; k < 3; k++)
+            d[k] = test_uniform(-spread, spread);
+    } while (d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > spread * spread);
+    for (k = 0; k < 3; k++)
+        x[k] = c[k] + d[k];
 }
 
 static void random_joints(double q[3])
@@ -103,10 +129,9 @@ int main(void)
          * (so that the answer turns on it alone), the others next to it
          * with room; 3 all with room; 4 patches of 8 points (a scan's
          * surfaces, which the proof takes as runs by one ball each): the
-         * first with its centre 0 to 4 cm beyond a link's radius and its
-         * points up to 3 cm off the centre, the others with room */
+         * first near a link (below), the others with room */
         int kind = trial % 5, i, steps, free_here, wraps = 1;
-        double centre[3];
+        double centre[3], spot[3], ray[3], ray_offset = 0.0;
         double a[3], b[3], worst = 1e30;
         random_joints(a);
         random_joints(b);
@@ -140,24 +165,25 @@ int main(void)
                 } while (x[0] * x[0] + x[1] * x[1] + x[2] * x[2] > 1.0);
             } else if (kind == 4 && i > 0) {
                 /* point 0 is alone; patches from 1 on, so that none holds
-                 * a point the proof tries first alone (every 16th) */
-                double q[3], d[3], len;
+                 * a point the proof tries first alone (every 16th). The
+                 * first is either round, or two halves on one ray from
+                 * the link: 5 to 7 cm out, then -1 to 2 cm (a run whose
+                 * halves' balls differ) */
+                int link = (i / 8 + trial / 5) % 3, split = (trial / 5) % 2;
                 if ((i - 1) % 8 == 0) {
+                    double q[3];
                     int at = (int)test_uniform(0, steps + 1);
                     config_at(a, b, wraps, at > steps ? steps : at, steps, q);
-                    point_near(q, (i / 8 + trial / 5) % 3,
-                               radius[(i / 8 + trial / 5) % 3],
-                               i == 1 ? test_uniform(0.0, 0.04)
-                                      : test_uniform(0.1, 0.3),
-                               centre);
+                    ray_from_link(q, link, spot, ray);
+                    ray_offset = i == 1 && !split ? test_uniform(0.0, 0.04)
+                                 : i == 1         ? test_uniform(0.05, 0.07)
+                                                  : test_uniform(0.1, 0.3);
                 }
-                do {
-                    for (k = 0; k < 3; k++)
-                        d[k] = test_uniform(-0.03, 0.03);
-                    len = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-                } while (len > 0.03 * 0.03);
+                if (i == 5 && split)
+                    ray_offset = test_uniform(-0.01, 0.02);
                 for (k = 0; k < 3; k++)
-                    x[k] = centre[k] + d[k];
+                    centre[k] = spot[k] + ray[k] * (radius[link] + ray_offset);
+                jitter(centre, i <= 8 && split ? 0.005 : 0.03, x);
             } else {
                 double q[3];
                 int at = (int)test_uniform(0, steps + 1),
