@@ -410,6 +410,7 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
     s.leaf = leaves;
     s.steps_left = STEPS_MEAN * pts->count + STEPS_START;
     s.max_steps = STEPS_PER_POINT;
+    s.balls_cleared = s.balls_failed = 0;
     store_leaves(&s, leaves);
     for (i = 0; i < pts->count; i += SAMPLE_STRIDE)
         if (!point_clear(&s, pts->xyz[i]))
@@ -418,7 +419,6 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
     ball = s;
     ball.max_steps = RUN_STEPS;
     ball.steps_left = STEPS_MEAN * pts->count + STEPS_START;
-    ball.balls_cleared = ball.balls_failed = 0;
     for (i = 0; i < pts->count; i++) {
         if (i % SAMPLE_STRIDE == 0 || off_sweep(&s, pts->xyz[i]))
             continue;
