@@ -266,20 +266,26 @@ static int near_clear(struct sweep *s, const double p[3])
     return 1;
 }
 
-static int point_clear(struct sweep *s, const float q[3])
+/* near_clear for a point as the table stores it */
+static int stored_near_clear(struct sweep *s, const float q[3])
 {
     double p[3];
     p[0] = q[0];
     p[1] = q[1];
     p[2] = q[2];
-    return off_sweep(s, q) || near_clear(s, p);
+    return near_clear(s, p);
 }
 
-/* The box of points xyz[run[0..n-1]], n >= 1. */
+static int point_clear(struct sweep *s, const float q[3])
+{
+    return off_sweep(s, q) || stored_near_clear(s, q);
+}
+
 struct box {
     float lo[3], hi[3];
 };
 
+/* The box of points xyz[run[0..n-1]], n >= 1. */
 static void box_of(const float (*xyz)[3], const long *run, int n, struct box *b)
 {
     int i, k;
@@ -356,14 +362,9 @@ static int run_clear(struct sweep *s, struct sweep *ball, const float (*xyz)[3],
             end = halves && h == 0 ? RUN_POINTS / 2 : n;
         if (balls && halves && end - first > 1 && ball_clear(s, ball, &part[h]))
             continue;
-        for (i = first; i < end; i++) {
-            double p[3];
-            p[0] = xyz[run[i]][0];
-            p[1] = xyz[run[i]][1];
-            p[2] = xyz[run[i]][2];
-            if (!near_clear(s, p))
+        for (i = first; i < end; i++)
+            if (!stored_near_clear(s, xyz[run[i]]))
                 return 0;
-        }
     }
     return 1;
 }
