@@ -2,8 +2,8 @@
  * it accepts is free when sampled every 0.1 degrees with the reference arm,
  * on clouds with points put next to the motion's own sampled
  * configurations (just inside and just outside a link's radius) and with
- * patches of 8 points, one centred 0 to 4 cm beyond a link (the runs the
- * proof takes by one ball), across
+ * patches of 8 points, one of them near a link, round or in two halves of
+ * different reach (the runs the proof takes by one ball), across
  * the alpha seam, with alpha still, turning over pi (an alpha that does not
  * wrap), and for no motion at all; and it does
  * prove motions that pass the points with room to spare. Uses the core's
@@ -169,21 +169,22 @@ int main(void)
                  * first is either round, or two halves on one ray from
                  * the link: 5 to 7 cm out, then -1 to 2 cm (a run whose
                  * halves' balls differ) */
-                int link = (i / 8 + trial / 5) % 3, split = (trial / 5) % 2;
+                int patch = (i - 1) / 8, link = (patch + trial / 5) % 3,
+                    split = (trial / 5) % 2;
                 if ((i - 1) % 8 == 0) {
                     double q[3];
                     int at = (int)test_uniform(0, steps + 1);
                     config_at(a, b, wraps, at > steps ? steps : at, steps, q);
                     ray_from_link(q, link, spot, ray);
-                    ray_offset = i == 1 && !split ? test_uniform(0.0, 0.04)
-                                 : i == 1         ? test_uniform(0.05, 0.07)
-                                                  : test_uniform(0.1, 0.3);
+                    ray_offset = patch == 0 && !split ? test_uniform(0.0, 0.04)
+                                 : patch == 0         ? test_uniform(0.05, 0.07)
+                                                      : test_uniform(0.1, 0.3);
                 }
                 if (i == 5 && split)
                     ray_offset = test_uniform(-0.01, 0.02);
                 for (k = 0; k < 3; k++)
                     centre[k] = spot[k] + ray[k] * (radius[link] + ray_offset);
-                jitter(centre, i <= 8 && split ? 0.005 : 0.03, x);
+                jitter(centre, patch == 0 && split ? 0.005 : 0.03, x);
             } else {
                 double q[3];
                 int at = (int)test_uniform(0, steps + 1),
