@@ -11,9 +11,10 @@
 // listing its points; a link looks only at the cells its capsule's box
 // touches); motions are checked discretely every 0.25 degree of joint
 // motion (OMPL's DiscreteMotionValidator). Planners: RRTConnect and PRM
-// (time to first solution), RRT* (path quality within the time limit). Every
-// path is written to the CSV as waypoints in degrees, for the independent
-// oracle (tools/oracle.py, run by tools/bench_compare.py).
+// (time to first solution: building the index and solve(), RRTConnect's
+// with a deadline that starts no thread), RRT* (path quality within the
+// time limit). Every path is written to the CSV as waypoints in degrees,
+// for the independent oracle (tools/oracle.py, run by tools/bench_compare.py).
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -24,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include <ompl/base/PlannerTerminationCondition.h>
 #include <ompl/base/SpaceInformation.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 #include <ompl/base/spaces/SO2StateSpace.h>
@@ -250,8 +252,20 @@ Result run_ompl(const scene &sc, const qrt_plan &ours, const Checker &chk,
     else
         ss.setPlanner(std::make_shared<og::RRTstar>(si));
     Result r;
+    // The spaces and the planner are set up untimed: a user who replans on
+    // every scan keeps them. Each planner gets the deadline it is faster
+    // with (measured 2026-12-04). solve(seconds) polls its deadline from a
+    // thread that sleeps in 1 ms slices and is joined at the end: about
+    // 1.1 ms on every solve (RRTConnect on tunnel_1: 1.15-1.26 ms that way,
+    // 0.26-0.38 ms with the thread-less deadline). PRM is the exception: it
+    // checks for a solution on a thread of its own, and with the thread-less
+    // deadline its medians rose from 1.3 to 9-46 ms in the tunnel and to
+    // 400 ms on the shelf.
+    ss.setup();
     double t0 = now_ms();
-    ob::PlannerStatus st = ss.solve(limit_s);
+    ob::PlannerStatus st =
+        name == "PRM" ? ss.solve(limit_s)
+                      : ss.solve(ob::timedPlannerTerminationCondition(limit_s));
     r.ms = now_ms() - t0;
     r.ok = st == ob::PlannerStatus::EXACT_SOLUTION;
     if (!r.ok)
