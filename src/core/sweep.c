@@ -209,15 +209,18 @@ static int advance(struct sweep *s, const double p[3], double tl, double th)
  * alpha between its zeros, which lie pi apart: on a turn shorter than pi,
  * the same sign at both ends means no zero between them, and the least |w|
  * at an end. Most points off the sweep leave here. */
+static int off_by_ends(double w0, double w1, double edge_wall)
+{
+    double lo = w0 < w1 ? w0 : w1, hi = w0 < w1 ? w1 : w0;
+    return (lo > edge_wall) | (hi < -edge_wall);
+}
+
 static int off_sweep(const struct sweep *s, const float q[3])
 {
-    double w0, w1;
-    if (!s->edges_ok)
-        return 0;
-    w0 = (double)q[0] * s->n0[0] + (double)q[1] * s->n0[1];
-    w1 = (double)q[0] * s->n1[0] + (double)q[1] * s->n1[1];
-    return (w0 > s->edge_wall && w1 > s->edge_wall) ||
-           (w0 < -s->edge_wall && w1 < -s->edge_wall);
+    return s->edges_ok &&
+           off_by_ends((double)q[0] * s->n0[0] + (double)q[1] * s->n0[1],
+                       (double)q[0] * s->n1[0] + (double)q[1] * s->n1[1],
+                       s->edge_wall);
 }
 
 /* Is p clear of the arm along the whole motion? Only while alpha is near
@@ -375,7 +378,7 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
                    struct qrt_sweep_leaf *leaves)
 {
     struct sweep s, ball;
-    double d[3], fastest;
+    double d[3], fastest, n0x, n0y, n1x, n1y, edge_wall;
     long i, run[RUN_POINTS], runs = 0;
     int k, n = 0;
     qrt_motion_delta(lat, a_deg, b_deg, d);
@@ -420,8 +423,19 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
     ball = s;
     ball.max_steps = RUN_STEPS;
     ball.steps_left = STEPS_MEAN * pts->count + STEPS_START;
+    /* off_sweep for every point, with what it reads in locals (run_clear
+     * is passed &s, so s's fields would be loaded again for each point);
+     * an infinite edge_wall when the ends cannot tell passes none */
+    n0x = s.n0[0];
+    n0y = s.n0[1];
+    n1x = s.n1[0];
+    n1y = s.n1[1];
+    edge_wall = s.edges_ok ? s.edge_wall : HUGE_VAL;
     for (i = 0; i < pts->count; i++) {
-        if (i % SAMPLE_STRIDE == 0 || off_sweep(&s, pts->xyz[i]))
+        const float *q = pts->xyz[i];
+        if (i % SAMPLE_STRIDE == 0 ||
+            off_by_ends((double)q[0] * n0x + (double)q[1] * n0y,
+                        (double)q[0] * n1x + (double)q[1] * n1y, edge_wall))
             continue;
         run[n++] = i;
         if (n == RUN_POINTS) {

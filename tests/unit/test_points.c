@@ -63,27 +63,41 @@ static void test_far_and_bad(void)
 }
 
 /* Every way a coordinate can be unusable, in every axis of a point in the
- * middle of a batch: refused whole, nothing counted. Finite extremes
- * (1e308, the smallest subnormal) are usable, far ones ignored. */
+ * middle of a batch, whether the point's other coordinates are within reach
+ * or far beyond it: refused whole, nothing counted, and the point stored
+ * before the batch kept as it was. Finite extremes (1e308, the smallest
+ * subnormal) are usable, far ones ignored. */
 static void test_each_bad_coordinate(void)
 {
     const double bad[4] = {NAN, -NAN, INFINITY, -INFINITY};
+    const double first[3] = {0.1, -0.2, 0.3};
     double batch[3 * 5];
     double extremes[3 * 4] = {1e308,    0, 0, -1e308, 1e308, -1e308,
                               4.9e-324, 0, 0, 0.2,    -0.3,  0.1};
-    int v, k, i;
+    int v, k, i, far;
     qrt_points_reset(&pts, 1.0);
+    CHECK(qrt_points_add(&pts, first, 1) == QRT_OK, "first point");
     for (v = 0; v < 4; v++)
-        for (k = 0; k < 3; k++) {
-            for (i = 0; i < 15; i++)
-                batch[i] = 0.01 * (double)(i + 1);
-            batch[3 * 2 + k] = bad[v];
-            CHECK(qrt_points_add(&pts, batch, 5) == QRT_E_INVALID,
-                  "value %d in axis %d refused", v, k);
-            CHECK(pts.count == 0 && pts.received == 0 && pts.ignored_far == 0,
-                  "value %d axis %d: nothing counted (%ld %ld %ld)", v, k,
-                  pts.count, pts.received, pts.ignored_far);
-        }
+        for (k = 0; k < 3; k++)
+            for (far = 0; far < 2; far++) {
+                for (i = 0; i < 15; i++)
+                    batch[i] = 0.01 * (double)(i + 1);
+                if (far)
+                    for (i = 0; i < 3; i++)
+                        batch[3 * 2 + i] = 1e308;
+                batch[3 * 2 + k] = bad[v];
+                CHECK(qrt_points_add(&pts, batch, 5) == QRT_E_INVALID,
+                      "value %d in axis %d (far %d) refused", v, k, far);
+                CHECK(pts.count == 1 && pts.received == 1 &&
+                          pts.ignored_far == 0,
+                      "value %d axis %d far %d: nothing counted (%ld %ld %ld)",
+                      v, k, far, pts.count, pts.received, pts.ignored_far);
+                for (i = 0; i < 3; i++)
+                    CHECK(pts.xyz[0][i] == (float)first[i],
+                          "value %d axis %d far %d: stored point kept", v, k,
+                          far);
+            }
+    qrt_points_reset(&pts, 1.0);
     CHECK(qrt_points_add(&pts, extremes, 4) == QRT_OK, "finite extremes");
     CHECK(pts.count == 2 && pts.received == 4 && pts.ignored_far == 2,
           "extremes: %ld stored, %ld received, %ld far", pts.count,
