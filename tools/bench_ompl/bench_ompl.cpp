@@ -11,9 +11,9 @@
 // listing its points; a link looks only at the cells its capsule's box
 // touches); motions are checked discretely every 0.25 degree of joint
 // motion (OMPL's DiscreteMotionValidator). Planners: RRTConnect and PRM
-// (time to first solution: building the index and solve(), RRTConnect's
-// with a deadline that starts no thread), RRT* (path quality within the
-// time limit). Every path is written to the CSV as waypoints in degrees,
+// (time to first solution: building the index and solve()), RRT* (path
+// quality within the time limit); RRTConnect and RRT* with a deadline that
+// starts no thread. Every path is written to the CSV as waypoints in degrees,
 // for the independent oracle (tools/oracle.py, run by tools/bench_compare.py).
 #include <algorithm>
 #include <array>
