@@ -80,17 +80,20 @@ static void requantise(struct qrt_points *pts, double voxel_m)
     }
 }
 
-/* Is every coordinate of the n points finite? x - x is 0 for a finite x
- * and NaN for an infinite or NaN one, and a NaN survives the sum: one
- * compare a point instead of three classifications. */
+/* Is every coordinate of p finite? x - x is 0 for a finite x and NaN for
+ * an infinite or NaN one, and a NaN survives the sum: one compare a point
+ * instead of three classifications. */
+static int finite_point(const double p[3])
+{
+    return (p[0] - p[0]) + (p[1] - p[1]) + (p[2] - p[2]) == 0.0;
+}
+
 static int all_finite(const double *xyz, long n)
 {
     long i;
-    for (i = 0; i < n; i++) {
-        const double *p = xyz + 3 * i;
-        if ((p[0] - p[0]) + (p[1] - p[1]) + (p[2] - p[2]) != 0.0)
+    for (i = 0; i < n; i++)
+        if (!finite_point(xyz + 3 * i))
             return 0;
-    }
     return 1;
 }
 
@@ -154,8 +157,8 @@ static int add_exact(struct qrt_points *pts, const double *xyz, long n)
         const double *p = xyz + 3 * i;
         double d2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
         if (!(d2 <= r2)) {
-            if ((p[0] - p[0]) + (p[1] - p[1]) + (p[2] - p[2]) != 0.0)
-                return QRT_E_INVALID; /* see all_finite */
+            if (!finite_point(p))
+                return QRT_E_INVALID;
             far++;
             continue;
         }
