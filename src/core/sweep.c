@@ -45,11 +45,10 @@ struct sweep {
     double speed[3], inv_speed[3];
     double wall; /* a point farther than this from the arm's plane is clear
                     of every link */
-    /* where alpha turns by less than pi: the plane's normal at both ends
-     * (-sin, cos), and wall with a margin for the rounding of w; else
-     * edges_ok is 0 */
+    /* the plane's normal at both ends (-sin, cos), and wall with a margin
+     * for the rounding of w where alpha turns by less than pi; else an
+     * infinite edge_wall, past which no point lies */
     double n0[2], n1[2], edge_wall;
-    int edges_ok;
     long n; /* stored configurations, at t = (i + 0.5) / n */
     struct qrt_sweep_leaf *leaf;
     long steps_left;
@@ -217,8 +216,7 @@ static int off_by_ends(double w0, double w1, double edge_wall)
 
 static int off_sweep(const struct sweep *s, const float q[3])
 {
-    return s->edges_ok &&
-           off_by_ends((double)q[0] * s->n0[0] + (double)q[1] * s->n0[1],
+    return off_by_ends((double)q[0] * s->n0[0] + (double)q[1] * s->n0[1],
                        (double)q[0] * s->n1[0] + (double)q[1] * s->n1[1],
                        s->edge_wall);
 }
@@ -402,8 +400,7 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
         if (radius_m[k] > s.wall)
             s.wall = radius_m[k];
     }
-    s.edges_ok = fabs(s.da) < QRT_PI - 1e-6;
-    s.edge_wall = s.wall + 1e-9;
+    s.edge_wall = fabs(s.da) < QRT_PI - 1e-6 ? s.wall + 1e-9 : HUGE_VAL;
     s.n0[0] = -sin(s.a0);
     s.n0[1] = cos(s.a0);
     s.n1[0] = -sin(s.a0 + s.da);
@@ -424,13 +421,12 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
     ball.max_steps = RUN_STEPS;
     ball.steps_left = STEPS_MEAN * pts->count + STEPS_START;
     /* off_sweep for every point, with what it reads in locals (run_clear
-     * is passed &s, so s's fields would be loaded again for each point);
-     * an infinite edge_wall when the ends cannot tell passes none */
+     * is passed &s, so s's fields would be loaded again for each point) */
     n0x = s.n0[0];
     n0y = s.n0[1];
     n1x = s.n1[0];
     n1y = s.n1[1];
-    edge_wall = s.edges_ok ? s.edge_wall : HUGE_VAL;
+    edge_wall = s.edge_wall;
     for (i = 0; i < pts->count; i++) {
         const float *q = pts->xyz[i];
         if (i % SAMPLE_STRIDE == 0 ||
