@@ -25,12 +25,17 @@
  * point alone, so a blocked one is usually told from a sample. */
 #define SAMPLE_STRIDE 16
 /* Points near the sweep, taken in the table's order, are tried first as
- * runs of this many (then as half runs) by one ball that holds them all:
- * a scan's points lie in its order along surfaces, so such a run is often
- * a small patch that clears the arm as a whole. A ball wider than
- * RUN_BALL_M is not tried; a ball's proof takes at most RUN_STEPS steps
- * (a run that brushes past the arm is quicker told point by point). */
-#define RUN_POINTS 8
+ * runs of this many by one ball that holds them all, then as halves, each
+ * by its own ball, down to RUN_LEAF points: a scan's points lie in its
+ * order along surfaces, so such a run is often a small patch that clears
+ * the arm as a whole. A ball wider than RUN_BALL_M is not tried; a ball's
+ * proof takes at most RUN_STEPS steps (a run that brushes past the arm is
+ * quicker told point by point). RUN_LEVELS is how many sizes of ball a
+ * run is tried with (32, 16, 8 and 4 points), and bounds the spans
+ * waiting to be tried (one more than the halvings). */
+#define RUN_POINTS 32
+#define RUN_LEAF 4
+#define RUN_LEVELS 4
 #define RUN_BALL_M 0.3
 #define RUN_STEPS 32
 
@@ -53,7 +58,8 @@ struct sweep {
     struct qrt_sweep_leaf *leaf;
     long steps_left;
     int max_steps; /* for one point or ball */
-    long balls_cleared, balls_failed;
+    /* how often a ball of each size (level 0 the whole run) cleared */
+    long balls_cleared[RUN_LEVELS], balls_failed[RUN_LEVELS];
 };
 
 static void leaf_at(const struct sweep *s, double t, struct qrt_sweep_leaf *lf)
@@ -306,7 +312,7 @@ static void box_of(const float (*xyz)[3], const long *run, int n, struct box *b)
  * so c kept farther than radius + r from every link keeps every member
  * farther than radius. */
 static int ball_clear(const struct sweep *s, struct sweep *ball,
-                      const struct box *b)
+                      const struct box *b, int level)
 {
     double c[3], r2 = 0.0, r;
     int k;
@@ -323,49 +329,78 @@ static int ball_clear(const struct sweep *s, struct sweep *ball,
             ball->radius[k] = s->radius[k] + r;
         ball->wall = s->wall + r;
         if (near_clear(ball, c)) {
-            ball->balls_cleared++;
+            ball->balls_cleared[level]++;
             return 1;
         }
     }
-    ball->balls_failed++;
+    ball->balls_failed[level]++;
     return 0;
 }
 
+static void box_merge(struct box *into, const struct box *b)
+{
+    int k;
+    for (k = 0; k < 3; k++) {
+        into->lo[k] = b->lo[k] < into->lo[k] ? b->lo[k] : into->lo[k];
+        into->hi[k] = b->hi[k] > into->hi[k] ? b->hi[k] : into->hi[k];
+    }
+}
+
 /* Points xyz[run[0..n-1]], none off the sweep by its ends: as one ball,
- * else as two half runs, else one by one. Balls are tried while they clear
- * at least a third of the time (and on every 16th run, so that a scene
- * whose first runs were wide can come back to them): in a table with no
- * order in space their boxes are only cost. */
+ * else as two halves, each as a ball, and so on down to RUN_LEAF points,
+ * else one by one; depth first, from a small stack of spans (no
+ * recursion). Every span starts on a leaf's first point and ends at a
+ * leaf's end or at n, so the leaves' boxes merged are exactly its box.
+ * Balls of a size are tried while they clear at least a third of the time
+ * (and on every 16th run, so that a scene whose first runs were wide can
+ * come back to them): in a table with no order in space, or where the
+ * motion brushes past the points, their boxes are only cost. */
 static int run_clear(struct sweep *s, struct sweep *ball, const float (*xyz)[3],
                      const long *run, int n, long runs)
 {
-    struct box part[2], whole;
-    int halves = n > RUN_POINTS / 2, h, i, k;
-    int balls =
-        ball->balls_failed <= 2 * ball->balls_cleared + 16 || runs % 16 == 0;
-    if (balls && n > 1) {
-        box_of(xyz, run, halves ? RUN_POINTS / 2 : n, &part[0]);
-        whole = part[0];
-        if (halves) {
-            box_of(xyz, run + RUN_POINTS / 2, n - RUN_POINTS / 2, &part[1]);
-            for (k = 0; k < 3; k++) {
-                whole.lo[k] =
-                    part[1].lo[k] < whole.lo[k] ? part[1].lo[k] : whole.lo[k];
-                whole.hi[k] =
-                    part[1].hi[k] > whole.hi[k] ? part[1].hi[k] : whole.hi[k];
-            }
-        }
-        if (ball_clear(s, ball, &whole))
-            return 1;
+    struct box leaf[RUN_POINTS / RUN_LEAF], b;
+    int first_of[RUN_LEVELS], count_of[RUN_LEVELS], level_of[RUN_LEVELS];
+    int leaves = (n + RUN_LEAF - 1) / RUN_LEAF, top = 1, i;
+    for (i = 0; i < leaves; i++) {
+        int first = i * RUN_LEAF;
+        box_of(xyz, run + first, n - first < RUN_LEAF ? n - first : RUN_LEAF,
+               &leaf[i]);
     }
-    for (h = 0; h < (halves ? 2 : 1); h++) {
-        int first = h * (RUN_POINTS / 2),
-            end = halves && h == 0 ? RUN_POINTS / 2 : n;
-        if (balls && halves && end - first > 1 && ball_clear(s, ball, &part[h]))
+    first_of[0] = 0;
+    count_of[0] = n;
+    level_of[0] = 0;
+    while (top > 0) {
+        int first, m, level, half;
+        top--;
+        first = first_of[top];
+        m = count_of[top];
+        level = level_of[top];
+        if (m > 1 &&
+            (ball->balls_failed[level] <= 2 * ball->balls_cleared[level] + 16 ||
+             runs % 16 == 0)) {
+            b = leaf[first / RUN_LEAF];
+            for (i = first / RUN_LEAF + 1;
+                 i < (first + m + RUN_LEAF - 1) / RUN_LEAF; i++)
+                box_merge(&b, &leaf[i]);
+            if (ball_clear(s, ball, &b, level))
+                continue;
+        }
+        /* (the level's test is never needed: halving 32 points three
+         * times leaves at most 4; it keeps the stack's bound plain) */
+        if (m <= RUN_LEAF || level + 1 >= RUN_LEVELS) {
+            for (i = first; i < first + m; i++)
+                if (!stored_near_clear(s, xyz[run[i]]))
+                    return 0;
             continue;
-        for (i = first; i < end; i++)
-            if (!stored_near_clear(s, xyz[run[i]]))
-                return 0;
+        }
+        /* the halves, split on a leaf's edge; the first is taken first */
+        half = (m / RUN_LEAF + 1) / 2 * RUN_LEAF;
+        first_of[top] = first + half;
+        count_of[top] = m - half;
+        level_of[top++] = level + 1;
+        first_of[top] = first;
+        count_of[top] = half;
+        level_of[top++] = level + 1;
     }
     return 1;
 }
@@ -411,7 +446,8 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
     s.leaf = leaves;
     s.steps_left = STEPS_MEAN * pts->count + STEPS_START;
     s.max_steps = STEPS_PER_POINT;
-    s.balls_cleared = s.balls_failed = 0;
+    for (k = 0; k < RUN_LEVELS; k++)
+        s.balls_cleared[k] = s.balls_failed[k] = 0;
     store_leaves(&s, leaves);
     for (i = 0; i < pts->count; i += SAMPLE_STRIDE)
         if (!point_clear(&s, pts->xyz[i]))

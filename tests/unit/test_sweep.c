@@ -2,8 +2,9 @@
  * it accepts is free when sampled every 0.1 degrees with the reference arm,
  * on clouds with points put next to the motion's own sampled
  * configurations (just inside and just outside a link's radius) and with
- * patches of 8 points, one of them near a link, round or in two halves of
- * different reach (the runs the proof takes by one ball), across
+ * patches of 8 points, one of them near a link, round, in two halves of
+ * different reach, or with one point nearer than the rest at each place
+ * (the runs the proof takes by one ball, then by halves), across
  * the alpha seam, with alpha still, turning over pi (an alpha that does not
  * wrap), and for no motion at all; and it does
  * prove motions that pass the points with room to spare. Uses the core's
@@ -166,11 +167,14 @@ int main(void)
             } else if (kind == 4 && i > 0) {
                 /* point 0 is alone; patches from 1 on, so that none holds
                  * a point the proof tries first alone (every 16th). The
-                 * first is either round, or two halves on one ray from
-                 * the link: 5 to 7 cm out, then -1 to 2 cm (a run whose
-                 * halves' balls differ) */
+                 * first is round; or two halves on one ray from the
+                 * link, 5 to 7 cm out, then -1 to 2 cm (a run whose
+                 * halves' balls differ); or 5 to 7 cm out but for one
+                 * point at -1 to 2 cm, at each place of the patch in
+                 * turn (so that a ball that left out the point at any
+                 * place in its run of the table would be caught) */
                 int patch = (i - 1) / 8, link = (patch + trial / 5) % 3,
-                    split = (trial / 5) % 2;
+                    split = (trial / 5) % 3, odd = 1 + (trial / 15) % 8;
                 if ((i - 1) % 8 == 0) {
                     double q[3];
                     int at = (int)test_uniform(0, steps + 1);
@@ -180,8 +184,11 @@ int main(void)
                                  : patch == 0         ? test_uniform(0.05, 0.07)
                                                       : test_uniform(0.1, 0.3);
                 }
-                if (i == 5 && split)
+                if (i == 5 && split == 1)
                     ray_offset = test_uniform(-0.01, 0.02);
+                if (split == 2 && patch == 0 && (i == odd || i == odd + 1))
+                    ray_offset = i == odd ? test_uniform(-0.01, 0.02)
+                                          : test_uniform(0.05, 0.07);
                 for (k = 0; k < 3; k++)
                     centre[k] = spot[k] + ray[k] * (radius[link] + ray_offset);
                 jitter(centre, patch == 0 && split ? 0.005 : 0.03, x);
