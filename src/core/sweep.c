@@ -26,15 +26,15 @@
 #define SAMPLE_STRIDE 16
 /* Points near the sweep, taken in the table's order, are tried first as
  * runs of this many by one ball that holds them all, then as halves, each
- * by its own ball, down to RUN_LEAF points: a scan's points lie in its
- * order along surfaces, so such a run is often a small patch that clears
+ * by its own ball, down to groups of RUN_GROUP points: a scan's points lie in
+ * its order along surfaces, so such a run is often a small patch that clears
  * the arm as a whole. A ball wider than RUN_BALL_M is not tried; a ball's
  * proof takes at most RUN_STEPS steps (a run that brushes past the arm is
  * quicker told point by point). RUN_LEVELS is how many sizes of ball a
  * run is tried with (32, 16, 8 and 4 points), and bounds the spans
  * waiting to be tried (one more than the halvings). */
 #define RUN_POINTS 32
-#define RUN_LEAF 4
+#define RUN_GROUP 4
 #define RUN_LEVELS 4
 #define RUN_BALL_M 0.3
 #define RUN_STEPS 32
@@ -347,10 +347,10 @@ static void box_merge(struct box *into, const struct box *b)
 }
 
 /* Points xyz[run[0..n-1]], none off the sweep by its ends: as one ball,
- * else as two halves, each as a ball, and so on down to RUN_LEAF points,
+ * else as two halves, each as a ball, and so on down to RUN_GROUP points,
  * else one by one; depth first, from a small stack of spans (no
- * recursion). Every span starts on a leaf's first point and ends at a
- * leaf's end or at n, so the leaves' boxes merged are exactly its box.
+ * recursion). Every span starts on a group's first point and ends at a
+ * group's end or at n, so its groups' boxes merged are exactly its box.
  * Balls of a size are tried while they clear at least a third of the time
  * (and on every 16th run, so that a scene whose first runs were wide can
  * come back to them): in a table with no order in space, or where the
@@ -358,13 +358,13 @@ static void box_merge(struct box *into, const struct box *b)
 static int run_clear(struct sweep *s, struct sweep *ball, const float (*xyz)[3],
                      const long *run, int n, long runs)
 {
-    struct box leaf[RUN_POINTS / RUN_LEAF], b;
+    struct box group[RUN_POINTS / RUN_GROUP], b;
     int first_of[RUN_LEVELS], count_of[RUN_LEVELS], level_of[RUN_LEVELS];
-    int leaves = (n + RUN_LEAF - 1) / RUN_LEAF, top = 1, i;
-    for (i = 0; i < leaves; i++) {
-        int first = i * RUN_LEAF;
-        box_of(xyz, run + first, n - first < RUN_LEAF ? n - first : RUN_LEAF,
-               &leaf[i]);
+    int groups = (n + RUN_GROUP - 1) / RUN_GROUP, top = 1, i;
+    for (i = 0; i < groups; i++) {
+        int first = i * RUN_GROUP;
+        box_of(xyz, run + first, n - first < RUN_GROUP ? n - first : RUN_GROUP,
+               &group[i]);
     }
     first_of[0] = 0;
     count_of[0] = n;
@@ -378,23 +378,23 @@ static int run_clear(struct sweep *s, struct sweep *ball, const float (*xyz)[3],
         if (m > 1 &&
             (ball->balls_failed[level] <= 2 * ball->balls_cleared[level] + 16 ||
              runs % 16 == 0)) {
-            b = leaf[first / RUN_LEAF];
-            for (i = first / RUN_LEAF + 1;
-                 i < (first + m + RUN_LEAF - 1) / RUN_LEAF; i++)
-                box_merge(&b, &leaf[i]);
+            b = group[first / RUN_GROUP];
+            for (i = first / RUN_GROUP + 1;
+                 i < (first + m + RUN_GROUP - 1) / RUN_GROUP; i++)
+                box_merge(&b, &group[i]);
             if (ball_clear(s, ball, &b, level))
                 continue;
         }
         /* (the level's test is never needed: halving 32 points three
          * times leaves at most 4; it keeps the stack's bound plain) */
-        if (m <= RUN_LEAF || level + 1 >= RUN_LEVELS) {
+        if (m <= RUN_GROUP || level + 1 >= RUN_LEVELS) {
             for (i = first; i < first + m; i++)
                 if (!stored_near_clear(s, xyz[run[i]]))
                     return 0;
             continue;
         }
-        /* the halves, split on a leaf's edge; the first is taken first */
-        half = (m / RUN_LEAF + 1) / 2 * RUN_LEAF;
+        /* the halves, split on a group's edge; the first is taken first */
+        half = (m / RUN_GROUP + 1) / 2 * RUN_GROUP;
         first_of[top] = first + half;
         count_of[top] = m - half;
         level_of[top++] = level + 1;
