@@ -130,6 +130,86 @@ static void test_counters_both_ways(void)
           pts.ignored_far, far);
 }
 
+/* A point at distance r from the base in a random direction. */
+static void at_distance(double r, double p[3])
+{
+    double len;
+    int k;
+    do {
+        for (k = 0; k < 3; k++)
+            p[k] = test_uniform(-1.0, 1.0);
+        len = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    } while (len < 0.1 || len > 1.0);
+    for (k = 0; k < 3; k++)
+        p[k] *= r / len;
+}
+
+/* Batches long enough to be taken in blocks of 64 points, each block
+ * checked whole in float: what is kept, in order, and what is counted far
+ * are exactly what the reach test in double says, with many points a hair
+ * either side of the reach (where float rounding could say otherwise), far
+ * points in some blocks and none in others, and batches that end on a
+ * block's edge or not. A bad coordinate at a block's first or last point,
+ * in a later block or in the last, shorter one refuses the batch whole. */
+static void test_blocks_exact(void)
+{
+    static double xyz[3 * 1000];
+    const long sizes[6] = {64, 65, 127, 128, 300, 1000};
+    const long bad_at[6] = {0, 63, 64, 127, 129, 299};
+    const double reach = 0.9;
+    int trial;
+    for (trial = 0; trial < 100; trial++) {
+        long n = sizes[trial % 6], i, kept = 0, far = 0;
+        /* 0: only inside; 1: hairs either side; 2: far points; 3: both;
+         * 4: one point in each block beyond reach by 1e-12 to 1e-8 of it,
+         * which float rounding alone cannot tell from the reach */
+        int mix = trial % 5, v = trial % 3;
+        double keep;
+        for (i = 0; i < n; i++) {
+            double *p = xyz + 3 * i, u = test_uniform(0.0, 1.0), r;
+            /* some blocks get none but inside points */
+            int plain = (i / 64) % 3 == 1 || mix == 0;
+            if (mix == 4 && i % 64 == 17)
+                r = reach * (1.0 + pow(10.0, test_uniform(-12, -8)));
+            else if (!plain && (mix == 1 || mix == 3) && u < 0.3)
+                r = reach * (1.0 + (u < 0.15 ? 1.0 : -1.0) *
+                                       pow(10.0, test_uniform(-12, -5)));
+            else if (!plain && (mix == 2 || mix == 3) && u > 0.9)
+                r = test_uniform(0.91, 5.0);
+            else
+                r = test_uniform(0.0, 0.899);
+            at_distance(r, p);
+        }
+        qrt_points_reset(&pts, reach);
+        CHECK(qrt_points_add(&pts, xyz, n) == QRT_OK, "batch of %ld", n);
+        for (i = 0; i < n; i++) {
+            const double *p = xyz + 3 * i;
+            if (p[0] * p[0] + p[1] * p[1] + p[2] * p[2] <= reach * reach) {
+                CHECK(kept < pts.count && pts.xyz[kept][0] == (float)p[0] &&
+                          pts.xyz[kept][1] == (float)p[1] &&
+                          pts.xyz[kept][2] == (float)p[2],
+                      "trial %d: point %ld is stored %ld", trial, i, kept);
+                kept++;
+            } else {
+                far++;
+            }
+        }
+        CHECK(pts.count == kept && pts.ignored_far == far && pts.received == n,
+              "trial %d: %ld stored (%ld in reach), %ld far (%ld)", trial,
+              pts.count, kept, pts.ignored_far, far);
+        /* now a bad coordinate: nothing changes */
+        keep = xyz[3 * bad_at[trial % 6] + v];
+        xyz[3 * bad_at[trial % 6] + v] = v == 0   ? NAN
+                                         : v == 1 ? INFINITY
+                                                  : -INFINITY;
+        CHECK(qrt_points_add(&pts, xyz, n) == QRT_E_INVALID,
+              "trial %d: bad value at %ld refused", trial, bad_at[trial % 6]);
+        CHECK(pts.count == kept && pts.received == n,
+              "trial %d: nothing counted from the bad batch", trial);
+        xyz[3 * bad_at[trial % 6] + v] = keep;
+    }
+}
+
 /* A long arm reaches so much space that not even 64 mm voxels fit: the
  * planner must refuse with QRT_STATUS_CAPACITY, never overflow. */
 static void test_capacity(void)
@@ -164,6 +244,7 @@ int main(void)
     test_far_and_bad();
     test_each_bad_coordinate();
     test_counters_both_ways();
+    test_blocks_exact();
     test_capacity();
     return test_done("test_points");
 }
