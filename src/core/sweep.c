@@ -39,6 +39,27 @@
 #define RUN_BALL_M 0.3
 #define RUN_STEPS 32
 
+/* Is a point off the sweep, farther than W from the arm's plane all along
+ * the motion, by the plane's two ends alone? |w| = rho |sin(phi - alpha)|
+ * is concave in alpha between its zeros, which lie pi apart: on a turn
+ * shorter than pi, the same sign of w at both ends means no zero between
+ * them, and the least |w| at an end. So with a = w0 and b = w1 it is
+ * min(a, b) > W or max(a, b) < -W; that is |a + b| - |a - b| > 2 W (for
+ * W > 0 one of the two cannot hold, and min, max are (a + b -+ |a - b|) / 2),
+ * and a + b, a - b are w along the sum and the difference of the ends'
+ * normals: four products, and no branch for min and max. Most points leave
+ * here, so it is done in float, and 2 W grows by more than that can be off:
+ * rounded to float, the normals' sum and difference are off by 2^-23, the
+ * products and sums by 2^-24 of 2 (|x| + |y|) each, the difference of the
+ * magnitudes by 2^-24 of 4 (|x| + |y|). That is 2^-20 (|x| + |y|), under
+ * 2^-19 reach for a point within `reach` of the base, so 2 W grows by
+ * 2^-18 reach. A point farther out than `reach` (the arm's links and its
+ * widest radius) cannot touch the arm, so what the test says of it is true
+ * either way. */
+struct float_ends {
+    float sum_x, sum_y, diff_x, diff_y, wall2;
+};
+
 struct sweep {
     double link[3];
     double a0, da, s0, ds, p0, dp; /* alpha, sigma and sigma + eta, radians:
@@ -50,11 +71,8 @@ struct sweep {
     double speed[3], inv_speed[3];
     double wall; /* a point farther than this from the arm's plane is clear
                     of every link */
-    /* the plane's normal at both ends (-sin, cos), and wall with a margin
-     * for the rounding of w where alpha turns by less than pi; else an
-     * infinite edge_wall, past which no point lies */
-    double n0[2], n1[2], edge_wall;
-    long n; /* stored configurations, at t = (i + 0.5) / n */
+    struct float_ends ends; /* for float_off */
+    long n;                 /* stored configurations, at t = (i + 0.5) / n */
     struct qrt_sweep_leaf *leaf;
     long steps_left;
     int max_steps; /* for one point or ball */
@@ -209,24 +227,6 @@ static int advance(struct sweep *s, const double p[3], double tl, double th)
     return 0;
 }
 
-/* Is p farther than `wall` from the arm's plane all along the motion, by
- * the plane's two ends alone? |w| = rho |sin(phi - alpha)| is concave in
- * alpha between its zeros, which lie pi apart: on a turn shorter than pi,
- * the same sign at both ends means no zero between them, and the least |w|
- * at an end. Most points off the sweep leave here. */
-static int off_by_ends(double w0, double w1, double edge_wall)
-{
-    double lo = w0 < w1 ? w0 : w1, hi = w0 < w1 ? w1 : w0;
-    return (lo > edge_wall) | (hi < -edge_wall);
-}
-
-static int off_sweep(const struct sweep *s, const float q[3])
-{
-    return off_by_ends((double)q[0] * s->n0[0] + (double)q[1] * s->n0[1],
-                       (double)q[0] * s->n1[0] + (double)q[1] * s->n1[1],
-                       s->edge_wall);
-}
-
 /* Is p clear of the arm along the whole motion? Only while alpha is near
  * p's bearing phi (or its opposite) can p be within `wall` of the arm's
  * plane: rho |sin(phi - alpha)| <= wall, that is phi - alpha within
@@ -283,27 +283,65 @@ static int stored_near_clear(struct sweep *s, const float q[3])
     return near_clear(s, p);
 }
 
+/* float_off's figures for a motion that turns alpha from a0 by da, of an
+ * arm with these links whose widest radius is radius_wall. The plane's
+ * normal at both ends is (-sin, cos) of alpha. W is the widest radius,
+ * with 1e-9 m for the normals' rounding in double, where alpha turns by
+ * less than pi; else infinite, and no point is put off. The 1e-6 covers
+ * W's own rounding to float. */
+static void float_ends_of(const double link[3], double radius_wall, double a0,
+                          double da, struct float_ends *f)
+{
+    double reach = link[0] + link[1] + link[2] + radius_wall, n0x = -sin(a0),
+           n0y = cos(a0), n1x = -sin(a0 + da), n1y = cos(a0 + da),
+           wall = fabs(da) < QRT_PI - 1e-6 ? radius_wall + 1e-9 : HUGE_VAL;
+    f->sum_x = (float)(n0x + n1x);
+    f->sum_y = (float)(n0y + n1y);
+    f->diff_x = (float)(n0x - n1x);
+    f->diff_y = (float)(n0y - n1y);
+    f->wall2 = (float)((2.0 * wall + 3.814697265625e-6 * reach) * (1.0 + 1e-6));
+}
+
+static int float_off(const float q[3], const struct float_ends *f)
+{
+    float along_sum = q[0] * f->sum_x + q[1] * f->sum_y,
+          along_diff = q[0] * f->diff_x + q[1] * f->diff_y;
+    return fabsf(along_sum) - fabsf(along_diff) > f->wall2;
+}
+
 static int point_clear(struct sweep *s, const float q[3])
 {
-    return off_sweep(s, q) || stored_near_clear(s, q);
+    return float_off(q, &s->ends) || stored_near_clear(s, q);
 }
 
 struct box {
     float lo[3], hi[3];
 };
 
-/* The box of points xyz[run[0..n-1]], n >= 1. */
+/* The box of points xyz[run[0..n-1]], n >= 1. (Kept in locals until the
+ * end: b's floats could alias xyz's, so stores into b would make every
+ * point be loaded again.) */
 static void box_of(const float (*xyz)[3], const long *run, int n, struct box *b)
 {
-    int i, k;
-    for (k = 0; k < 3; k++)
-        b->lo[k] = b->hi[k] = xyz[run[0]][k];
-    for (i = 1; i < n; i++)
-        for (k = 0; k < 3; k++) {
-            float v = xyz[run[i]][k];
-            b->lo[k] = v < b->lo[k] ? v : b->lo[k];
-            b->hi[k] = v > b->hi[k] ? v : b->hi[k];
-        }
+    const float *p = xyz[run[0]];
+    float lo_x = p[0], lo_y = p[1], lo_z = p[2], hi_x = p[0], hi_y = p[1],
+          hi_z = p[2];
+    int i;
+    for (i = 1; i < n; i++) {
+        p = xyz[run[i]];
+        lo_x = p[0] < lo_x ? p[0] : lo_x;
+        hi_x = p[0] > hi_x ? p[0] : hi_x;
+        lo_y = p[1] < lo_y ? p[1] : lo_y;
+        hi_y = p[1] > hi_y ? p[1] : hi_y;
+        lo_z = p[2] < lo_z ? p[2] : lo_z;
+        hi_z = p[2] > hi_z ? p[2] : hi_z;
+    }
+    b->lo[0] = lo_x;
+    b->lo[1] = lo_y;
+    b->lo[2] = lo_z;
+    b->hi[0] = hi_x;
+    b->hi[1] = hi_y;
+    b->hi[2] = hi_z;
 }
 
 /* Are the points in box b clear of the arm all along the motion, as one
@@ -411,7 +449,8 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
                    struct qrt_sweep_leaf *leaves)
 {
     struct sweep s, ball;
-    double d[3], fastest, n0x, n0y, n1x, n1y, edge_wall;
+    struct float_ends ends;
+    double d[3], fastest;
     long i, run[RUN_POINTS], runs = 0;
     int k, n = 0;
     qrt_motion_delta(lat, a_deg, b_deg, d);
@@ -435,11 +474,7 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
         if (radius_m[k] > s.wall)
             s.wall = radius_m[k];
     }
-    s.edge_wall = fabs(s.da) < QRT_PI - 1e-6 ? s.wall + 1e-9 : HUGE_VAL;
-    s.n0[0] = -sin(s.a0);
-    s.n0[1] = cos(s.a0);
-    s.n1[0] = -sin(s.a0 + s.da);
-    s.n1[1] = cos(s.a0 + s.da);
+    float_ends_of(s.link, s.wall, s.a0, s.da, &s.ends);
     s.n = 1;
     while (s.n < QRT_SWEEP_LEAVES && (double)s.n * LEAF_SPACING_M < fastest)
         s.n *= 2;
@@ -456,24 +491,21 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
     ball = s;
     ball.max_steps = RUN_STEPS;
     ball.steps_left = STEPS_MEAN * pts->count + STEPS_START;
-    /* off_sweep for every point, with what it reads in locals (run_clear
-     * is passed &s, so s's fields would be loaded again for each point) */
-    n0x = s.n0[0];
-    n0y = s.n0[1];
-    n1x = s.n1[0];
-    n1y = s.n1[1];
-    edge_wall = s.edge_wall;
-    for (i = 0; i < pts->count; i++) {
-        const float *q = pts->xyz[i];
-        if (i % SAMPLE_STRIDE == 0 ||
-            off_by_ends((double)q[0] * n0x + (double)q[1] * n0y,
-                        (double)q[0] * n1x + (double)q[1] * n1y, edge_wall))
-            continue;
-        run[n++] = i;
-        if (n == RUN_POINTS) {
-            if (!run_clear(&s, &ball, pts->xyz, run, n, runs++))
-                return 0;
-            n = 0;
+    /* every point but the samples, with what the test reads in a local
+     * (run_clear is passed &s, so s's fields would be loaded again) */
+    ends = s.ends;
+    for (i = 0; i < pts->count; i += SAMPLE_STRIDE) {
+        long j, end = pts->count - i < SAMPLE_STRIDE ? pts->count
+                                                     : i + SAMPLE_STRIDE;
+        for (j = i + 1; j < end; j++) {
+            if (float_off(pts->xyz[j], &ends))
+                continue;
+            run[n++] = j;
+            if (n == RUN_POINTS) {
+                if (!run_clear(&s, &ball, pts->xyz, run, n, runs++))
+                    return 0;
+                n = 0;
+            }
         }
     }
     return n == 0 || run_clear(&s, &ball, pts->xyz, run, n, runs);

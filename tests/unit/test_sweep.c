@@ -7,8 +7,11 @@
  * (the runs the proof takes by one ball, then by halves), across
  * the alpha seam, with alpha still, turning over pi (an alpha that does not
  * wrap), and for no motion at all; and it does
- * prove motions that pass the points with room to spare. Uses the core's
- * internal sweep.h. */
+ * prove motions that pass the points with room to spare. A point a hair
+ * (1e-9 to 1e-7 m) inside a link at the start stops the proof, however
+ * the float test of points off the sweep rounds. Uses the core's internal
+ * sweep.h. */
+#include "../../src/core/geom.h"
 #include "../../src/core/sweep.h"
 #include "check.h"
 #include "qrtplan/qrtplan.h"
@@ -100,6 +103,62 @@ static void random_joints(double q[3])
     q[0] = test_uniform(-180, 180);
     q[1] = test_uniform(-40, 180);
     q[2] = test_uniform(-180, 140);
+}
+
+/* A point a hair inside the widest link's radius at the motion's start
+ * (the outermost such link: float's rounding grows with |x|), straight
+ * across the arm's plane from the link's axis. Its w there is the wall
+ * less 1e-9 to 1e-7 m, so only a margin for rounding keeps the float test
+ * of whether a point is off the sweep from putting it off. The motion
+ * turns alpha either way, so that at its end the point is far from the
+ * plane, or on it. The point is the table's 1st to 16th in turn, since
+ * every 16th is tried apart. Returns how many such points were inside the
+ * radius as stored, each of which must have stopped the proof. */
+static int hair_inside(const struct qrt_params *prm,
+                       const struct qrt_lattice *lat, const double radius[3])
+{
+    double cloud[3 * 16], stored[3 * 16], a[3], b[3], p[4][3], n[2], side,
+        depth, s;
+    int trial, i, k, widest = 0, inside = 0;
+    for (k = 1; k < 3; k++)
+        if (radius[k] >= radius[widest])
+            widest = k;
+    for (trial = 0; trial < test_count(2000); trial++) {
+        random_joints(a);
+        for (k = 0; k < 3; k++)
+            b[k] = a[k];
+        b[0] = wrap180(a[0] + test_uniform(-60.0, 60.0));
+        ref_fk(a, p);
+        n[0] = -sin(a[0] * QRT_DEG);
+        n[1] = cos(a[0] * QRT_DEG);
+        side = trial % 2 ? 1.0 : -1.0;
+        depth = pow(10.0, test_uniform(-9.0, -7.0));
+        s = test_uniform(0.2, 0.8);
+        for (i = 0; i < 16; i++) { /* the others well clear, above */
+            cloud[3 * i] = 0.0;
+            cloud[3 * i + 1] = 0.0;
+            cloud[3 * i + 2] = -1.0 - 0.01 * i;
+        }
+        i = trial % 16;
+        for (k = 0; k < 3; k++)
+            cloud[3 * i + k] =
+                p[widest][k] + s * (p[widest + 1][k] - p[widest][k]);
+        cloud[3 * i] += side * (radius[widest] - depth) * n[0];
+        cloud[3 * i + 1] += side * (radius[widest] - depth) * n[1];
+        qrt_points_reset(&pl.points, 10.0);
+        CHECK(qrt_points_add(&pl.points, cloud, 16) == QRT_OK, "add");
+        for (k = 0; k < 3 * 16; k++)
+            stored[k] = pl.points.xyz[k / 3][k % 3];
+        if (ref_clearance(a, stored, 16, radius) >= -1e-9)
+            continue; /* rounded to float, it came out */
+        inside++;
+        CHECK(!qrt_sweep_free(&prm->arm, radius, &pl.points, lat, a, b,
+                              pl.search.sweep),
+              "proved free, yet point %d is %.2g m inside link %d at the "
+              "start: (%.2f %.2f %.2f), alpha to %.2f",
+              i, depth, widest, a[0], a[1], a[2], b[0]);
+    }
+    return inside;
 }
 
 int main(void)
@@ -236,6 +295,8 @@ int main(void)
             proved_roomy += free_here;
         }
     }
+    k = hair_inside(&prm, &lat_wraps, radius);
+    CHECK(k > test_count(2000) / 2, "only %d points a hair inside", k);
     /* the cases must all have occurred, or the checks above proved little */
     CHECK(colliding > test_count(1200) / 10, "%d colliding motions", colliding);
     CHECK(roomy > test_count(1200) / 10, "%d motions with room", roomy);
