@@ -134,7 +134,7 @@ static int hair_inside(const struct qrt_params *prm,
         side = trial % 2 ? 1.0 : -1.0;
         depth = pow(10.0, test_uniform(-9.0, -7.0));
         s = test_uniform(0.2, 0.8);
-        for (i = 0; i < 16; i++) { /* the others well clear, above */
+        for (i = 0; i < 16; i++) { /* the others 1 m below the base */
             cloud[3 * i] = 0.0;
             cloud[3 * i + 1] = 0.0;
             cloud[3 * i + 2] = -1.0 - 0.01 * i;
