@@ -27,10 +27,14 @@ extern "C" {
 #define QRT_VOXEL_MAX_M 0.064
 #define QRT_POINT_HASH_SLOTS (2L * QRT_MAX_POINTS)
 
+/* The entries are stored by axis, entry i at (x[i], y[i], z[i]): the
+ * passes over every point (the intake's reach check, the one-pass proof's
+ * off-sweep test) then read whole vectors of one axis, and the compiler
+ * makes them 4 lanes wide. */
 struct qrt_points {
-    float xyz[QRT_MAX_POINTS][3];
+    float x[QRT_MAX_POINTS], y[QRT_MAX_POINTS], z[QRT_MAX_POINTS];
     uint32_t hash[QRT_POINT_HASH_SLOTS]; /* voxel mode: entry index + 1 */
-    long count;                          /* entries in xyz */
+    long count;                          /* entries in x, y, z */
     long received;    /* points passed to qrt_points_add since reset */
     long ignored_far; /* beyond reach_m */
     long dropped;     /* lost to capacity: non-zero means do not plan */
@@ -49,6 +53,22 @@ int qrt_points_add(struct qrt_points *pts, const double *xyz, long n);
 /* Radius every stored point stands for beyond its stored position: the
  * voxel's half-diagonal plus the float rounding of the stored position. */
 double qrt_points_inflation_m(const struct qrt_points *pts);
+
+/* Read-only views of a table's axes (or of any points kept by axis), for
+ * the passes that read them: entry i at (x[i], y[i], z[i]). */
+struct qrt_point_axes {
+    const float *x, *y, *z;
+};
+
+static inline struct qrt_point_axes
+qrt_points_axes(const struct qrt_points *pts)
+{
+    struct qrt_point_axes a;
+    a.x = pts->x;
+    a.y = pts->y;
+    a.z = pts->z;
+    return a;
+}
 
 #ifdef __cplusplus
 }

@@ -19,12 +19,14 @@ long qrt_cluster_scratch_len(long n)
     return table_size(n) + 2 * n;
 }
 
-static void cube_of(const float p[3], double inv_cell, long key[3])
+/* (inline: every point passes here, and without it GCC stopped inlining
+ * it once the axes were read through ax: about 15 instructions a point) */
+static inline void cube_of(const struct qrt_point_axes *ax, long i,
+                           double inv_cell, long key[3])
 {
-    /* written out: every point passes here, and the loop stayed rolled */
-    key[0] = qrt_floor((double)p[0] * inv_cell);
-    key[1] = qrt_floor((double)p[1] * inv_cell);
-    key[2] = qrt_floor((double)p[2] * inv_cell);
+    key[0] = qrt_floor((double)ax->x[i] * inv_cell);
+    key[1] = qrt_floor((double)ax->y[i] * inv_cell);
+    key[2] = qrt_floor((double)ax->z[i] * inv_cell);
 }
 
 /* A cube's key packed into 30 bits (10 per axis), or -1 when it does not
@@ -42,14 +44,14 @@ static int32_t packed(const long key[3])
 }
 
 /* Do points a and b lie in the same cube? */
-static int same_cube(const float (*pts)[3], const int32_t *cube, long a, long b,
-                     double inv_cell)
+static int same_cube(const struct qrt_point_axes *ax, const int32_t *cube,
+                     long a, long b, double inv_cell)
 {
     long ka[3], kb[3];
     if (cube[a] >= 0 || cube[b] >= 0)
         return cube[a] == cube[b];
-    cube_of(pts[a], inv_cell, ka);
-    cube_of(pts[b], inv_cell, kb);
+    cube_of(ax, a, inv_cell, ka);
+    cube_of(ax, b, inv_cell, kb);
     return ka[0] == kb[0] && ka[1] == kb[1] && ka[2] == kb[2];
 }
 
@@ -69,7 +71,7 @@ static long slot_of(const long key[3], long size)
     return (long)(h & (uint64_t)(size - 1));
 }
 
-void qrt_cluster_points(const float (*pts)[3], long n, double cell_m,
+void qrt_cluster_points(const struct qrt_point_axes *ax, long n, double cell_m,
                         int max_members, int32_t *scratch,
                         qrt_cluster_visit visit, void *ctx)
 {
@@ -89,7 +91,7 @@ void qrt_cluster_points(const float (*pts)[3], long n, double cell_m,
      * reverse index order, whichever other cubes share it. */
     for (i = 0; i < n; i++) {
         long key[3];
-        cube_of(pts[i], inv_cell, key);
+        cube_of(ax, i, inv_cell, key);
         cube[i] = packed(key);
         s = cube[i] >= 0 ? slot_of_packed(cube[i], size_bits)
                          : slot_of(key, size);
@@ -105,7 +107,7 @@ void qrt_cluster_points(const float (*pts)[3], long n, double cell_m,
             int m = 0;
             while (e >= 0) {
                 long nxt = next[e];
-                if (same_cube(pts, cube, e, first, inv_cell)) {
+                if (same_cube(ax, cube, e, first, inv_cell)) {
                     if (prev < 0)
                         head[s] = (int32_t)nxt;
                     else
@@ -139,11 +141,11 @@ static void count_group(void *ctx, const int32_t *members, int m)
     ++*(long *)ctx;
 }
 
-long qrt_cluster_count(const float (*pts)[3], long n, double cell_m,
+long qrt_cluster_count(const struct qrt_point_axes *ax, long n, double cell_m,
                        int max_members, int32_t *scratch)
 {
     long groups = 0;
-    qrt_cluster_points(pts, n, cell_m, max_members, scratch, count_group,
+    qrt_cluster_points(ax, n, cell_m, max_members, scratch, count_group,
                        &groups);
     return groups;
 }

@@ -5,6 +5,8 @@
 
 #include <stdint.h>
 
+#include "qrtplan/points.h"
+
 /* Edge of the cubes that group points for the raster: larger groups share
  * more work, but their bounding balls are less often already covered. */
 #ifndef QRT_CLUSTER_CELL_M
@@ -24,7 +26,7 @@ long qrt_cluster_scratch_len(long n);
 /* Call visit once per group of points that share a cube of edge cell_m
  * (a cube's points come in groups of at most max_members), each point in
  * exactly one group. scratch holds qrt_cluster_scratch_len(n) entries. */
-void qrt_cluster_points(const float (*pts)[3], long n, double cell_m,
+void qrt_cluster_points(const struct qrt_point_axes *ax, long n, double cell_m,
                         int max_members, int32_t *scratch,
                         qrt_cluster_visit visit, void *ctx);
 
@@ -33,7 +35,7 @@ void qrt_cluster_points(const float (*pts)[3], long n, double cell_m,
 double qrt_cluster_cell_for(long n, long groups);
 
 /* How many groups qrt_cluster_points makes (the same arguments, no visit). */
-long qrt_cluster_count(const float (*pts)[3], long n, double cell_m,
+long qrt_cluster_count(const struct qrt_point_axes *ax, long n, double cell_m,
                        int max_members, int32_t *scratch);
 
 #endif

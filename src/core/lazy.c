@@ -46,6 +46,7 @@ static long table_take(struct qrt_planner *pl, long n, long size)
 
 struct keep_ctx {
     struct qrt_planner *pl;
+    struct qrt_point_axes ax;
     const struct qrt_raster *r;
     long members;
     int ok;
@@ -67,8 +68,8 @@ static void keep_cluster(void *ctx, const int32_t *members, int m)
         return;
     }
     g = &c->t.geom[k->pl->lazy_clusters++];
-    qrt_raster_cluster_prepare(k->r, (const float(*)[3])k->pl->points.xyz,
-                               members, m, g, c->member_rho + k->members);
+    qrt_raster_cluster_prepare(k->r, &k->ax, members, m, g,
+                               c->member_rho + k->members);
     g->first = (int32_t)k->members;
     for (j = 0; j < m; j++)
         c->members[k->members++] = members[j];
@@ -136,21 +137,20 @@ int qrt_lazy_begin(struct qrt_planner *pl, struct qrt_raster *r)
     if (qrt_cluster_scratch_len(pl->points.count) > QRT_MAX_NODES)
         return 0;
     k.pl = pl;
+    k.ax = qrt_points_axes(&pl->points);
     k.r = r;
     k.members = 0;
     k.ok = 1;
-    qrt_cluster_points((const float(*)[3])pl->points.xyz, pl->points.count,
-                       QRT_CLUSTER_CELL_M, QRT_CLUSTER_MAX, pl->heap_pos,
-                       keep_cluster, &k);
+    qrt_cluster_points(&k.ax, pl->points.count, QRT_CLUSTER_CELL_M,
+                       QRT_CLUSTER_MAX, pl->heap_pos, keep_cluster, &k);
     cell = qrt_cluster_cell_for(pl->points.count, pl->lazy_clusters);
     if (k.ok && cell != QRT_CLUSTER_CELL_M) {
         /* a sparse cloud: the larger cubes a whole build takes too (link
          * 1's slabs, rastered while keeping, come out the same again) */
         pl->lazy_clusters = 0;
         k.members = 0;
-        qrt_cluster_points((const float(*)[3])pl->points.xyz, pl->points.count,
-                           cell, QRT_CLUSTER_MAX, pl->heap_pos, keep_cluster,
-                           &k);
+        qrt_cluster_points(&k.ax, pl->points.count, cell, QRT_CLUSTER_MAX,
+                           pl->heap_pos, keep_cluster, &k);
     }
     if (!k.ok)
         return 0;
@@ -176,7 +176,7 @@ static long alpha_views(struct qrt_planner *pl, int ia)
 {
     const long size = (long)sizeof(struct qrt_alpha_view);
     struct qrt_lazy_clusters *c = &pl->open.lazy.clusters;
-    const float(*pts)[3] = (const float(*)[3])pl->points.xyz;
+    const struct qrt_point_axes ax = qrt_points_axes(&pl->points);
     long i, n = 0, first, k = 0, e, count;
     if (pl->lazy_alpha_first[ia] >= 0)
         return pl->lazy_alpha_first[ia];
@@ -202,7 +202,7 @@ static long alpha_views(struct qrt_planner *pl, int ia)
         i = pl->lazy_lists ? c->t.list[pl->lazy_alpha_list[ia] + e] : e;
         g = &c->t.geom[i];
         if (((g->alpha[ia >> 6] >> (ia & 63)) & 1U) &&
-            qrt_raster_view_make(pl->lazy_raster, pts, c->members + g->first,
+            qrt_raster_view_make(pl->lazy_raster, &ax, c->members + g->first,
                                  c->member_rho + g->first, g, ia, v)) {
             v->cluster = (int32_t)i;
             v->members_at = -1;
@@ -223,6 +223,7 @@ static const struct qrt_disc *member_discs(struct qrt_planner *pl, int ia,
 {
     struct qrt_lazy_clusters *c = &pl->open.lazy.clusters;
     const struct qrt_cluster_geom *g = &c->t.geom[v->cluster];
+    const struct qrt_point_axes ax = qrt_points_axes(&pl->points);
     struct qrt_disc *md = scratch;
     long at;
     if (v->members_at >= 0)
@@ -234,9 +235,8 @@ static const struct qrt_disc *member_discs(struct qrt_planner *pl, int ia,
     } else {
         pl->lazy_unkept_discs++;
     }
-    qrt_raster_member_discs(pl->lazy_raster, (const float(*)[3])pl->points.xyz,
-                            c->members + g->first, c->member_rho + g->first,
-                            g->m, ia, md);
+    qrt_raster_member_discs(pl->lazy_raster, &ax, c->members + g->first,
+                            c->member_rho + g->first, g->m, ia, md);
     return md;
 }
 
@@ -250,10 +250,10 @@ void qrt_lazy_build(struct qrt_planner *pl, int ia, int is)
     qrt_raster_only_block(pl->lazy_raster, ia, is, is + 1);
     first = alpha_views(pl, ia);
     if (first < 0) { /* no room for the views: each cluster from scratch */
-        const float(*pts)[3] = (const float(*)[3])pl->points.xyz;
+        const struct qrt_point_axes ax = qrt_points_axes(&pl->points);
         for (k = 0; k < pl->lazy_clusters; k++) {
             const struct qrt_cluster_geom *g = &c->t.geom[k];
-            qrt_raster_cluster_at(pl->lazy_raster, pts, c->members + g->first,
+            qrt_raster_cluster_at(pl->lazy_raster, &ax, c->members + g->first,
                                   c->member_rho + g->first, g, ia);
         }
     }

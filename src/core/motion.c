@@ -144,6 +144,36 @@ static void near_box(const double lo[3], const double hi[3], double reach,
     }
 }
 
+/* Points are first tried against the box that holds the arm's clearance so
+ * far in blocks of this many, in float over each axis (4 lanes): most
+ * blocks of a scan hold no point near the arm, and most points of the
+ * others are out of the box too. */
+#define CLEARANCE_BLOCK 64
+
+/* Mark in in[] the CLEARANCE_BLOCK entries from `at` on that are not out
+ * of the box lo..hi, and tell how many. The box is of doubles and the test
+ * in float, yet a point the test puts out is out of lo..hi: no float lies
+ * strictly between a double and the float nearest it, so for a float x,
+ * x < (float)lo gives x < lo, and x > (float)hi gives x > hi. (A bound past
+ * float's range rounds to an infinity, for which the same holds; a NaN
+ * bound puts no point out, as in the test of each point.) One loop of fixed
+ * count and no branch: the compiler makes it 4 lanes wide. */
+static int mark_in_box(const struct qrt_points *pts, long at,
+                       const double lo[3], const double hi[3],
+                       int in[CLEARANCE_BLOCK])
+{
+    float lo_x = (float)lo[0], lo_y = (float)lo[1], lo_z = (float)lo[2],
+          hi_x = (float)hi[0], hi_y = (float)hi[1], hi_z = (float)hi[2];
+    int j, count = 0;
+    for (j = 0; j < CLEARANCE_BLOCK; j++) {
+        float x = pts->x[at + j], y = pts->y[at + j], z = pts->z[at + j];
+        in[j] = !((x < lo_x) | (x > hi_x) | (y < lo_y) | (y > hi_y) |
+                  (z < lo_z) | (z > hi_z));
+        count += in[j];
+    }
+    return count;
+}
+
 double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],
                             const struct qrt_points *pts, const double q_deg[3],
                             double cap)
@@ -172,30 +202,45 @@ double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],
      * turns them away with one test instead of three (grown again only
      * when best falls). */
     near_box(arm_lo, arm_hi, best + widest, near_lo, near_hi);
-    for (i = 0; i < pts->count; i++) {
-        double x[3];
-        x[0] = pts->xyz[i][0];
-        x[1] = pts->xyz[i][1];
-        x[2] = pts->xyz[i][2];
-        if (x[0] < near_lo[0] || x[0] > near_hi[0] || x[1] < near_lo[1] ||
-            x[1] > near_hi[1] || x[2] < near_lo[2] || x[2] > near_hi[2])
+    for (i = 0; i < pts->count; i += CLEARANCE_BLOCK) {
+        /* the marks are made with the box as it is at the block's start;
+         * it only shrinks, so a point out of it then stays out */
+        int in[CLEARANCE_BLOCK], m = CLEARANCE_BLOCK, b;
+        if (pts->count - i < CLEARANCE_BLOCK) {
+            m = (int)(pts->count - i);
+            for (b = 0; b < m; b++)
+                in[b] = 1;
+        } else if (mark_in_box(pts, i, near_lo, near_hi, in) == 0) {
             continue;
-        for (k = 0; k < 3; k++) {
-            /* a point farther than best + radius from the link's box on
-             * some axis cannot lower best: skip the segment distance */
-            double reach = best + radius_m[k], c;
-            if (x[0] < lo[k][0] - reach || x[0] > hi[k][0] + reach ||
-                x[1] < lo[k][1] - reach || x[1] > hi[k][1] + reach ||
-                x[2] < lo[k][2] - reach || x[2] > hi[k][2] + reach)
-                continue;
-            c = sqrt(qrt_seg_dist2(x, p[k], p[k + 1])) - radius_m[k];
-            if (c < best) {
-                best = c;
-                near_box(arm_lo, arm_hi, best + widest, near_lo, near_hi);
-            }
         }
-        if (best <= 0.0)
-            return best; /* colliding: how deep does not matter */
+        for (b = 0; b < m; b++) {
+            double x[3];
+            if (!in[b])
+                continue;
+            x[0] = pts->x[i + b];
+            x[1] = pts->y[i + b];
+            x[2] = pts->z[i + b];
+            if (x[0] < near_lo[0] || x[0] > near_hi[0] || x[1] < near_lo[1] ||
+                x[1] > near_hi[1] || x[2] < near_lo[2] || x[2] > near_hi[2])
+                continue;
+            for (k = 0; k < 3; k++) {
+                /* a point farther than best + radius from the link's box
+                 * on some axis cannot lower best: skip the segment
+                 * distance */
+                double reach = best + radius_m[k], c;
+                if (x[0] < lo[k][0] - reach || x[0] > hi[k][0] + reach ||
+                    x[1] < lo[k][1] - reach || x[1] > hi[k][1] + reach ||
+                    x[2] < lo[k][2] - reach || x[2] > hi[k][2] + reach)
+                    continue;
+                c = sqrt(qrt_seg_dist2(x, p[k], p[k + 1])) - radius_m[k];
+                if (c < best) {
+                    best = c;
+                    near_box(arm_lo, arm_hi, best + widest, near_lo, near_hi);
+                }
+            }
+            if (best <= 0.0)
+                return best; /* colliding: how deep does not matter */
+        }
     }
     return best;
 }

@@ -88,13 +88,13 @@ int qrt_planner_add_points(struct qrt_planner *pl, const double *xyz, long n)
 
 struct cluster_ctx {
     const struct qrt_raster *raster;
-    const float (*pts)[3];
+    struct qrt_point_axes ax;
 };
 
 static void raster_cluster(void *ctx, const int32_t *members, int m)
 {
     const struct cluster_ctx *c = (const struct cluster_ctx *)ctx;
-    qrt_raster_cluster(c->raster, c->pts, members, m);
+    qrt_raster_cluster(c->raster, &c->ax, members, m);
 }
 
 /* Link k's collision radius for the points now in the table. */
@@ -142,19 +142,19 @@ static void raster_part(struct qrt_planner *pl, int part, int nparts,
         struct cluster_ctx ctx;
         double cell;
         ctx.raster = &r;
-        ctx.pts = (const float(*)[3])pl->points.xyz;
+        ctx.ax = qrt_points_axes(&pl->points);
         cell = qrt_cluster_cell_for(
             pl->points.count,
-            qrt_cluster_count(ctx.pts, pl->points.count, QRT_CLUSTER_CELL_M,
+            qrt_cluster_count(&ctx.ax, pl->points.count, QRT_CLUSTER_CELL_M,
                               QRT_CLUSTER_MAX, scratch));
-        qrt_cluster_points(ctx.pts, pl->points.count, cell, QRT_CLUSTER_MAX,
+        qrt_cluster_points(&ctx.ax, pl->points.count, cell, QRT_CLUSTER_MAX,
                            scratch, raster_cluster, &ctx);
     } else {
         for (i = 0; i < pl->points.count; i++) {
             double p[3];
-            p[0] = pl->points.xyz[i][0];
-            p[1] = pl->points.xyz[i][1];
-            p[2] = pl->points.xyz[i][2];
+            p[0] = pl->points.x[i];
+            p[1] = pl->points.y[i];
+            p[2] = pl->points.z[i];
             qrt_raster_point(&r, p);
         }
     }

@@ -21,9 +21,9 @@ static uint32_t voxel_hash(long ix, long iy, long iz)
 
 static void entry_voxel(const struct qrt_points *pts, long i, long v[3])
 {
-    int k;
-    for (k = 0; k < 3; k++)
-        v[k] = voxel_coord(pts->xyz[i][k], pts->voxel_m);
+    v[0] = voxel_coord(pts->x[i], pts->voxel_m);
+    v[1] = voxel_coord(pts->y[i], pts->voxel_m);
+    v[2] = voxel_coord(pts->z[i], pts->voxel_m);
 }
 
 /* Index of the entry in voxel v, or -1; *slot gets where it is or would go.
@@ -48,11 +48,23 @@ static long find_voxel(const struct qrt_points *pts, const long v[3],
     }
 }
 
+static float voxel_centre(long v, double voxel_m)
+{
+    return (float)(((double)v + 0.5) * voxel_m);
+}
+
 static void store_centre(struct qrt_points *pts, long i, const long v[3])
 {
-    int k;
-    for (k = 0; k < 3; k++)
-        pts->xyz[i][k] = (float)(((double)v[k] + 0.5) * pts->voxel_m);
+    pts->x[i] = voxel_centre(v[0], pts->voxel_m);
+    pts->y[i] = voxel_centre(v[1], pts->voxel_m);
+    pts->z[i] = voxel_centre(v[2], pts->voxel_m);
+}
+
+static void store_point(struct qrt_points *pts, long i, const double p[3])
+{
+    pts->x[i] = (float)p[0];
+    pts->y[i] = (float)p[1];
+    pts->z[i] = (float)p[2];
 }
 
 /* Move every entry onto the centre of its voxel at edge voxel_m, merging
@@ -69,9 +81,7 @@ static void requantise(struct qrt_points *pts, double voxel_m)
     for (i = 0; i < n; i++) {
         long v[3];
         uint32_t slot;
-        int k;
-        for (k = 0; k < 3; k++)
-            v[k] = voxel_coord(pts->xyz[i][k], voxel_m);
+        entry_voxel(pts, i, v); /* on the new grid: voxel_m is set */
         if (find_voxel(pts, v, &slot) >= 0)
             continue;
         store_centre(pts, pts->count, v);
@@ -105,8 +115,7 @@ static void add_one(struct qrt_points *pts, const double p[3])
         int k;
         if (pts->voxel_m == 0.0) {
             if (pts->count < QRT_MAX_POINTS) {
-                for (k = 0; k < 3; k++)
-                    pts->xyz[pts->count][k] = (float)p[k];
+                store_point(pts, pts->count, p);
                 pts->count++;
                 return;
             }
@@ -152,35 +161,37 @@ void qrt_points_reset(struct qrt_points *pts, double reach_m)
 #define INTAKE_BLOCK 64
 #define INTAKE_RETRY 8
 
-/* Store the INTAKE_BLOCK points at xyz as floats at dst and tell whether
- * every one is surely within reach: its stored float's squared distance
- * at most near2, which the caller sets under the squared reach by more
- * than float rounding can move it (see add_exact). A NaN fails the
- * compare and an infinity is beyond reach: such a block goes on to
- * keep_near. */
-static int store_block(float (*dst)[3], const double *xyz, float near2)
+/* Store the INTAKE_BLOCK points at xyz as floats from entry `at` on and
+ * tell whether every one is surely within reach: its stored float's
+ * squared distance at most near2, which the caller sets under the squared
+ * reach by more than float rounding can move it (see add_exact). A NaN
+ * fails the compare and an infinity is beyond reach: such a block goes on
+ * to keep_near. (The table's members are indexed directly: the compiler
+ * knows that x, y and z do not overlap, and needs no check to vectorise.) */
+static int store_block(struct qrt_points *pts, long at, const double *xyz,
+                       float near2)
 {
     int i, near = 0;
     for (i = 0; i < INTAKE_BLOCK; i++) {
-        dst[i][0] = (float)xyz[3 * i];
-        dst[i][1] = (float)xyz[3 * i + 1];
-        dst[i][2] = (float)xyz[3 * i + 2];
+        pts->x[at + i] = (float)xyz[3 * i];
+        pts->y[at + i] = (float)xyz[3 * i + 1];
+        pts->z[at + i] = (float)xyz[3 * i + 2];
     }
     for (i = 0; i < INTAKE_BLOCK; i++) {
-        const float *q = dst[i];
-        near += q[0] * q[0] + q[1] * q[1] + q[2] * q[2] <= near2 ? 1 : 0;
+        float x = pts->x[at + i], y = pts->y[at + i], z = pts->z[at + i];
+        near += x * x + y * y + z * z <= near2 ? 1 : 0;
     }
     return near == INTAKE_BLOCK;
 }
 
-/* Store at dst, in order, the points of xyz[0 .. 3m - 1] within r2 of the
- * base; *count grows by how many, *far by the rest. QRT_E_INVALID if a
- * coordinate is not finite: only a point not within reach pays for that
- * test. */
-static int keep_near(float (*dst)[3], const double *xyz, long m, double r2,
-                     long *count, long *far)
+/* Store from entry *count on, in order, the points of xyz[0 .. 3m - 1]
+ * within r2 of the base; *count grows by how many, *far by the rest.
+ * QRT_E_INVALID if a coordinate is not finite: only a point not within
+ * reach pays for that test. */
+static int keep_near(struct qrt_points *pts, const double *xyz, long m,
+                     double r2, long *count, long *far)
 {
-    long i, kept = 0;
+    long i, next = *count;
     for (i = 0; i < m; i++) {
         const double *p = xyz + 3 * i;
         if (!(p[0] * p[0] + p[1] * p[1] + p[2] * p[2] <= r2)) {
@@ -189,12 +200,10 @@ static int keep_near(float (*dst)[3], const double *xyz, long m, double r2,
             (*far)++;
             continue;
         }
-        dst[kept][0] = (float)p[0];
-        dst[kept][1] = (float)p[1];
-        dst[kept][2] = (float)p[2];
-        kept++;
+        store_point(pts, next, p);
+        next++;
     }
-    *count += kept;
+    *count = next;
     return QRT_OK;
 }
 
@@ -216,14 +225,13 @@ static int add_exact(struct qrt_points *pts, const double *xyz, long n)
         long m = n - i < INTAKE_BLOCK ? n - i : INTAKE_BLOCK;
         if (m == INTAKE_BLOCK &&
             (!last_mixed || (i / INTAKE_BLOCK) % INTAKE_RETRY == 0)) {
-            last_mixed = !store_block(&pts->xyz[count], xyz + 3 * i, near2);
+            last_mixed = !store_block(pts, count, xyz + 3 * i, near2);
             if (!last_mixed) {
                 count += m;
                 continue;
             }
         }
-        if (keep_near(&pts->xyz[count], xyz + 3 * i, m, r2, &count, &far) !=
-            QRT_OK)
+        if (keep_near(pts, xyz + 3 * i, m, r2, &count, &far) != QRT_OK)
             return QRT_E_INVALID;
     }
     pts->count = count;

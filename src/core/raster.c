@@ -716,25 +716,32 @@ static void set_alpha_bits(const struct qrt_raster *r, double rho, double phi,
         set_row_range(g->alpha, ranges[i][0], ranges[i][1]);
 }
 
+/* Entry i of ax, in double. */
+static void member_point(const struct qrt_point_axes *ax, int32_t i,
+                         double p[3])
+{
+    p[0] = ax->x[i];
+    p[1] = ax->y[i];
+    p[2] = ax->z[i];
+}
+
 void qrt_raster_cluster_prepare(const struct qrt_raster *r,
-                                const float (*pts)[3], const int32_t *members,
-                                int m, struct qrt_cluster_geom *g, double *mrho)
+                                const struct qrt_point_axes *ax,
+                                const int32_t *members, int m,
+                                struct qrt_cluster_geom *g, double *mrho)
 {
     double lo_x, lo_y, lo_z, hi_x, hi_y, hi_z, dx, dy, dz;
     int j;
     g->m = m;
     g->ball = 0.0;
-    lo_x = hi_x = pts[members[0]][0];
-    lo_y = hi_y = pts[members[0]][1];
-    lo_z = hi_z = pts[members[0]][2];
+    lo_x = hi_x = ax->x[members[0]];
+    lo_y = hi_y = ax->y[members[0]];
+    lo_z = hi_z = ax->z[members[0]];
     /* the axes written out, the box in scalars: every point of the cloud
      * passes here once, and arrays indexed by k stayed in memory */
     for (j = 0; j < m; j++) {
-        const float *q = pts[members[j]];
         double p[3];
-        p[0] = q[0];
-        p[1] = q[1];
-        p[2] = q[2];
+        member_point(ax, members[j], p);
         lo_x = p[0] < lo_x ? p[0] : lo_x;
         hi_x = p[0] > hi_x ? p[0] : hi_x;
         lo_y = p[1] < lo_y ? p[1] : lo_y;
@@ -767,17 +774,16 @@ void qrt_raster_cluster_prepare(const struct qrt_raster *r,
 
 /* Member j's plane at alpha node ia; returns plane_at's answer. */
 static int member_plane(const struct qrt_raster *r, int ia,
-                        const float (*pts)[3], const int32_t *members,
+                        const struct qrt_point_axes *ax, const int32_t *members,
                         const double *mrho, int j, struct plane *pl)
 {
     double p[3];
-    int k;
-    for (k = 0; k < 3; k++)
-        p[k] = pts[members[j]][k];
+    member_point(ax, members[j], p);
     return plane_at(r, ia, p, mrho[j], 0.0, pl);
 }
 
-int qrt_raster_view_make(const struct qrt_raster *r, const float (*pts)[3],
+int qrt_raster_view_make(const struct qrt_raster *r,
+                         const struct qrt_point_axes *ax,
                          const int32_t *members, const double *mrho,
                          const struct qrt_cluster_geom *g, int ia,
                          struct qrt_alpha_view *v)
@@ -798,7 +804,7 @@ int qrt_raster_view_make(const struct qrt_raster *r, const float (*pts)[3],
         if (nrows > 0 && !rows_full(r, ia, rows, nrows))
             for (i = 0; i < m; i++) {
                 struct plane mp;
-                if (member_plane(r, ia, pts, members, mrho, i, &mp))
+                if (member_plane(r, ia, ax, members, mrho, i, &mp))
                     raster_link2(r, ia, &mp, full);
             }
     }
@@ -811,7 +817,8 @@ int qrt_raster_view_make(const struct qrt_raster *r, const float (*pts)[3],
     return 1;
 }
 
-void qrt_raster_member_discs(const struct qrt_raster *r, const float (*pts)[3],
+void qrt_raster_member_discs(const struct qrt_raster *r,
+                             const struct qrt_point_axes *ax,
                              const int32_t *members, const double *mrho, int m,
                              int ia, struct qrt_disc *md)
 {
@@ -819,9 +826,7 @@ void qrt_raster_member_discs(const struct qrt_raster *r, const float (*pts)[3],
     for (j = 0; j < m; j++) { /* only link 3's disc (plane_at's dc) */
         struct plane pl;
         double p[3];
-        int k;
-        for (k = 0; k < 3; k++)
-            p[k] = pts[members[j]][k];
+        member_point(ax, members[j], p);
         md[j].reach3 = -1.0f;
         if (plane_or_disc_at(r, ia, p, mrho[j], 0.0, 1, &pl))
             md[j] = pl.dc;
@@ -962,7 +967,8 @@ int qrt_raster_node_members(const struct qrt_raster *r, int is, int ie,
  * that row; otherwise each member is rastered on the row as usual. Dense
  * clouds block each cell hundreds of times over, so most rows are skipped.
  */
-void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
+void qrt_raster_cluster_at(const struct qrt_raster *r,
+                           const struct qrt_point_axes *ax,
                            const int32_t *members, const double *mrho,
                            const struct qrt_cluster_geom *g, int ia)
 {
@@ -972,7 +978,7 @@ void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
     int discs_ready = 0, w;
     if (!owns(r, ia) || !((g->alpha[ia >> 6] >> (ia & 63)) & 1U))
         return;
-    if (!qrt_raster_view_make(r, pts, members, mrho, g, ia, &v))
+    if (!qrt_raster_view_make(r, ax, members, mrho, g, ia, &v))
         return;
     for (w = 0; w < QRT_SIGMA_WORDS; w++) {
         uint64_t rows = v.rows[w]; /* the rows link 3 may reach, in order */
@@ -981,7 +987,7 @@ void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
             if (!wanted(r, ia, is) || !view_row(r, &v, g->m, ia, is, ask))
                 continue;
             if (!discs_ready) {
-                qrt_raster_member_discs(r, pts, members, mrho, g->m, ia, md);
+                qrt_raster_member_discs(r, ax, members, mrho, g->m, ia, md);
                 discs_ready = 1;
             }
             view_members(r, ia, is, ask, md, g->m);
@@ -989,28 +995,28 @@ void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
     }
 }
 
-void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
-                        const int32_t *members, int m)
+void qrt_raster_cluster(const struct qrt_raster *r,
+                        const struct qrt_point_axes *ax, const int32_t *members,
+                        int m)
 {
     struct qrt_cluster_geom g;
     double mrho[QRT_CLUSTER_MAX];
-    int j, k, ia;
+    int j, ia;
     if (m > QRT_CLUSTER_MAX) {
         /* the clusterer never emits more, but every point must still count */
         for (j = 0; j < m; j++) {
             double p[3];
-            for (k = 0; k < 3; k++)
-                p[k] = pts[members[j]][k];
+            member_point(ax, members[j], p);
             qrt_raster_point(r, p);
         }
         return;
     }
     if (m < 1)
         return;
-    qrt_raster_cluster_prepare(r, pts, members, m, &g, mrho);
+    qrt_raster_cluster_prepare(r, ax, members, m, &g, mrho);
     for (ia = 0; ia < r->mask->lat.n[0]; ia++)
         if ((g.alpha[ia >> 6] >> (ia & 63)) & 1U)
-            qrt_raster_cluster_at(r, pts, members, mrho, &g, ia);
+            qrt_raster_cluster_at(r, ax, members, mrho, &g, ia);
 }
 
 void qrt_raster_only_rows(struct qrt_raster *r, const uint64_t *rows)

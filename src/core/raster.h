@@ -78,11 +78,12 @@ void qrt_raster_point(const struct qrt_raster *r, const double p[3]);
 #define QRT_CLUSTER_MAX 32
 
 /* The same result as qrt_raster_point on each of the m points
- * pts[members[i]] (m <= QRT_CLUSTER_MAX), with less work when they lie close
- * together: the cells blocked are a superset of every cell a member truly
+ * entries members[i] of ax (m <= QRT_CLUSTER_MAX), with less work when they lie
+ * close together: the cells blocked are a superset of every cell a member truly
  * blocks, and a subset of what rastering them one by one blocks. */
-void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
-                        const int32_t *members, int m);
+void qrt_raster_cluster(const struct qrt_raster *r,
+                        const struct qrt_point_axes *ax, const int32_t *members,
+                        int m);
 
 /* qrt_raster_cluster in two steps, so that a cluster can be rastered one
  * alpha node at a time: _prepare rasters the members' link 1 and fills *g
@@ -91,10 +92,11 @@ void qrt_raster_cluster(const struct qrt_raster *r, const float (*pts)[3],
  * links 2 and 3 at alpha node ia. _prepare, then _at on every alpha node,
  * is qrt_raster_cluster. 1 <= m <= QRT_CLUSTER_MAX. */
 void qrt_raster_cluster_prepare(const struct qrt_raster *r,
-                                const float (*pts)[3], const int32_t *members,
-                                int m, struct qrt_cluster_geom *g,
-                                double *mrho);
-void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
+                                const struct qrt_point_axes *ax,
+                                const int32_t *members, int m,
+                                struct qrt_cluster_geom *g, double *mrho);
+void qrt_raster_cluster_at(const struct qrt_raster *r,
+                           const struct qrt_point_axes *ax,
                            const int32_t *members, const double *mrho,
                            const struct qrt_cluster_geom *g, int ia);
 
@@ -119,14 +121,16 @@ void qrt_raster_cluster_at(const struct qrt_raster *r, const float (*pts)[3],
  *   (is, ie) by the sector test, or n; row_views, if not NULL, has bit k
  *   set exactly for the views whose rows hold is (only those are read);
  * - _node_members: does one of the m members' discs? */
-int qrt_raster_view_make(const struct qrt_raster *r, const float (*pts)[3],
+int qrt_raster_view_make(const struct qrt_raster *r,
+                         const struct qrt_point_axes *ax,
                          const int32_t *members, const double *mrho,
                          const struct qrt_cluster_geom *g, int ia,
                          struct qrt_alpha_view *v);
 int qrt_raster_view_row(const struct qrt_raster *r,
                         const struct qrt_alpha_view *v, int m, int ia, int is,
                         uint64_t ask[QRT_ROW_WORDS]);
-void qrt_raster_member_discs(const struct qrt_raster *r, const float (*pts)[3],
+void qrt_raster_member_discs(const struct qrt_raster *r,
+                             const struct qrt_point_axes *ax,
                              const int32_t *members, const double *mrho, int m,
                              int ia, struct qrt_disc *md);
 void qrt_raster_view_members(const struct qrt_raster *r, int ia, int is,

@@ -24,6 +24,10 @@
 /* Every 16th point is tried first: a motion is seldom blocked by one
  * point alone, so a blocked one is usually told from a sample. */
 #define SAMPLE_STRIDE 16
+/* The off-sweep test is made on blocks of this many entries (a multiple of
+ * SAMPLE_STRIDE, so that a block's samples are its entries 0, 16, ...). */
+#define OFF_BLOCK 64
+#define OFF_SPANS (OFF_BLOCK / SAMPLE_STRIDE)
 /* Points near the sweep, taken in the table's order, are tried first as
  * runs of this many by one ball that holds them all, then as halves, each
  * by its own ball, down to groups of RUN_GROUP points: a scan's points lie in
@@ -273,13 +277,14 @@ static int near_clear(struct sweep *s, const double p[3])
     return 1;
 }
 
-/* near_clear for a point as the table stores it */
-static int stored_near_clear(struct sweep *s, const float q[3])
+/* near_clear for the table's entry i */
+static int stored_near_clear(struct sweep *s, const struct qrt_point_axes *ax,
+                             long i)
 {
     double p[3];
-    p[0] = q[0];
-    p[1] = q[1];
-    p[2] = q[2];
+    p[0] = ax->x[i];
+    p[1] = ax->y[i];
+    p[2] = ax->z[i];
     return near_clear(s, p);
 }
 
@@ -302,39 +307,62 @@ static void float_ends_of(const double link[3], double radius_wall, double a0,
     f->wall2 = (float)((2.0 * wall + 3.814697265625e-6 * reach) * (1.0 + 1e-6));
 }
 
-static int float_off(const float q[3], const struct float_ends *f)
+static int float_off(float x, float y, const struct float_ends *f)
 {
-    float along_sum = q[0] * f->sum_x + q[1] * f->sum_y,
-          along_diff = q[0] * f->diff_x + q[1] * f->diff_y;
+    float along_sum = x * f->sum_x + y * f->sum_y,
+          along_diff = x * f->diff_x + y * f->diff_y;
     return fabsf(along_sum) - fabsf(along_diff) > f->wall2;
 }
 
-static int point_clear(struct sweep *s, const float q[3])
+static int point_clear(struct sweep *s, const struct qrt_point_axes *ax, long i)
 {
-    return float_off(q, &s->ends) || stored_near_clear(s, q);
+    return float_off(ax->x[i], ax->y[i], &s->ends) ||
+           stored_near_clear(s, ax, i);
+}
+
+/* Of the OFF_BLOCK entries from `at` on, mark in near[] those float_off
+ * does not put off the sweep, and count them in each span of
+ * SAMPLE_STRIDE entries, leaving out the span's first (its sample, tried
+ * on its own). Loops of fixed count with no branch over two axes: the
+ * compiler makes them 4 lanes wide. */
+static void mark_near(const struct qrt_point_axes *ax, long at,
+                      const struct float_ends *f, int near[OFF_BLOCK],
+                      int count[OFF_SPANS])
+{
+    int b, j;
+    for (b = 0; b < OFF_SPANS; b++) {
+        const float *x = ax->x + at + b * SAMPLE_STRIDE,
+                    *y = ax->y + at + b * SAMPLE_STRIDE;
+        int *mark = near + b * SAMPLE_STRIDE, c = 0;
+        for (j = 0; j < SAMPLE_STRIDE; j++) {
+            mark[j] = float_off(x[j], y[j], f) ? 0 : 1;
+            c += mark[j];
+        }
+        count[b] = c - mark[0];
+    }
 }
 
 struct box {
     float lo[3], hi[3];
 };
 
-/* The box of points xyz[run[0..n-1]], n >= 1. (Kept in locals until the
- * end: b's floats could alias xyz's, so stores into b would make every
- * point be loaded again.) */
-static void box_of(const float (*xyz)[3], const long *run, int n, struct box *b)
+/* The box of the table's entries run[0..n-1], n >= 1. (Kept in locals
+ * until the end: b's floats could alias the table's, so stores into b
+ * would make every point be loaded again.) */
+static void box_of(const struct qrt_point_axes *ax, const long *run, int n,
+                   struct box *b)
 {
-    const float *p = xyz[run[0]];
-    float lo_x = p[0], lo_y = p[1], lo_z = p[2], hi_x = p[0], hi_y = p[1],
-          hi_z = p[2];
+    float lo_x = ax->x[run[0]], lo_y = ax->y[run[0]], lo_z = ax->z[run[0]],
+          hi_x = lo_x, hi_y = lo_y, hi_z = lo_z;
     int i;
     for (i = 1; i < n; i++) {
-        p = xyz[run[i]];
-        lo_x = p[0] < lo_x ? p[0] : lo_x;
-        hi_x = p[0] > hi_x ? p[0] : hi_x;
-        lo_y = p[1] < lo_y ? p[1] : lo_y;
-        hi_y = p[1] > hi_y ? p[1] : hi_y;
-        lo_z = p[2] < lo_z ? p[2] : lo_z;
-        hi_z = p[2] > hi_z ? p[2] : hi_z;
+        float x = ax->x[run[i]], y = ax->y[run[i]], z = ax->z[run[i]];
+        lo_x = x < lo_x ? x : lo_x;
+        hi_x = x > hi_x ? x : hi_x;
+        lo_y = y < lo_y ? y : lo_y;
+        hi_y = y > hi_y ? y : hi_y;
+        lo_z = z < lo_z ? z : lo_z;
+        hi_z = z > hi_z ? z : hi_z;
     }
     b->lo[0] = lo_x;
     b->lo[1] = lo_y;
@@ -384,7 +412,7 @@ static void box_merge(struct box *into, const struct box *b)
     }
 }
 
-/* Points xyz[run[0..n-1]], none off the sweep by its ends: as one ball,
+/* The table's entries run[0..n-1], none off the sweep by its ends: as one ball,
  * else as two halves, each as a ball, and so on down to RUN_GROUP points,
  * else one by one; depth first, from a small stack of spans (no
  * recursion). Every span starts on a group's first point and ends at a
@@ -393,15 +421,16 @@ static void box_merge(struct box *into, const struct box *b)
  * (and on every 16th run, so that a scene whose first runs were wide can
  * come back to them): in a table with no order in space, or where the
  * motion brushes past the points, their boxes are only cost. */
-static int run_clear(struct sweep *s, struct sweep *ball, const float (*xyz)[3],
-                     const long *run, int n, long runs)
+static int run_clear(struct sweep *s, struct sweep *ball,
+                     const struct qrt_point_axes *ax, const long *run, int n,
+                     long runs)
 {
     struct box group[RUN_POINTS / RUN_GROUP], b;
     int first_of[RUN_LEVELS], count_of[RUN_LEVELS], level_of[RUN_LEVELS];
     int groups = (n + RUN_GROUP - 1) / RUN_GROUP, top = 1, i;
     for (i = 0; i < groups; i++) {
         int first = i * RUN_GROUP;
-        box_of(xyz, run + first, n - first < RUN_GROUP ? n - first : RUN_GROUP,
+        box_of(ax, run + first, n - first < RUN_GROUP ? n - first : RUN_GROUP,
                &group[i]);
     }
     first_of[0] = 0;
@@ -427,7 +456,7 @@ static int run_clear(struct sweep *s, struct sweep *ball, const float (*xyz)[3],
          * times leaves at most 4; it keeps the stack's bound plain) */
         if (m <= RUN_GROUP || level + 1 >= RUN_LEVELS) {
             for (i = first; i < first + m; i++)
-                if (!stored_near_clear(s, xyz[run[i]]))
+                if (!stored_near_clear(s, ax, run[i]))
                     return 0;
             continue;
         }
@@ -450,8 +479,10 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
 {
     struct sweep s, ball;
     struct float_ends ends;
+    struct qrt_point_axes ax = qrt_points_axes(pts);
     double d[3], fastest;
-    long i, run[RUN_POINTS], runs = 0;
+    /* a span adds at most SAMPLE_STRIDE - 1 to fewer than RUN_POINTS */
+    long i, run[RUN_POINTS + SAMPLE_STRIDE], runs = 0;
     int k, n = 0;
     qrt_motion_delta(lat, a_deg, b_deg, d);
     qrt_motion_link_speeds(arm, d, s.speed);
@@ -484,29 +515,53 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
     for (k = 0; k < RUN_LEVELS; k++)
         s.balls_cleared[k] = s.balls_failed[k] = 0;
     store_leaves(&s, leaves);
+    for (k = 0; k < RUN_POINTS + SAMPLE_STRIDE; k++)
+        run[k] = 0; /* (the rest of a run is moved as a fixed count) */
     for (i = 0; i < pts->count; i += SAMPLE_STRIDE)
-        if (!point_clear(&s, pts->xyz[i]))
+        if (!point_clear(&s, &ax, i))
             return 0;
     /* the balls' steps are counted apart: they only save work */
     ball = s;
     ball.max_steps = RUN_STEPS;
     ball.steps_left = STEPS_MEAN * pts->count + STEPS_START;
     /* every point but the samples, with what the test reads in a local
-     * (run_clear is passed &s, so s's fields would be loaded again) */
+     * (run_clear is passed &s, so s's fields would be loaded again): in
+     * blocks marked by mark_near, then the last entries one by one */
     ends = s.ends;
-    for (i = 0; i < pts->count; i += SAMPLE_STRIDE) {
-        long j, end = pts->count - i < SAMPLE_STRIDE ? pts->count
-                                                     : i + SAMPLE_STRIDE;
-        for (j = i + 1; j < end; j++) {
-            if (float_off(pts->xyz[j], &ends))
+    for (i = 0; i + OFF_BLOCK <= pts->count; i += OFF_BLOCK) {
+        int near[OFF_BLOCK], count[OFF_SPANS], b, j;
+        mark_near(&ax, i, &ends, near, count);
+        for (b = 0; b < OFF_SPANS; b++) {
+            const int *mark = near + b * SAMPLE_STRIDE;
+            long first = i + b * SAMPLE_STRIDE;
+            if (count[b] == 0)
                 continue;
-            run[n++] = j;
-            if (n == RUN_POINTS) {
-                if (!run_clear(&s, &ball, pts->xyz, run, n, runs++))
+            /* with no branch: every entry is written, the near ones kept */
+            for (j = 1; j < SAMPLE_STRIDE; j++) {
+                run[n] = first + j;
+                n += mark[j];
+            }
+            if (n >= RUN_POINTS) { /* a run of RUN_POINTS; the rest kept */
+                if (!run_clear(&s, &ball, &ax, run, RUN_POINTS, runs++))
                     return 0;
-                n = 0;
+                n -= RUN_POINTS;
+                /* the rest, at most SAMPLE_STRIDE - 2 (n was under
+                 * RUN_POINTS before the span), moved as a fixed count: no
+                 * call to memmove */
+                for (j = 0; j < SAMPLE_STRIDE - 2; j++)
+                    run[j] = run[RUN_POINTS + j];
             }
         }
     }
-    return n == 0 || run_clear(&s, &ball, pts->xyz, run, n, runs);
+    for (; i < pts->count; i++) {
+        if (i % SAMPLE_STRIDE == 0 || float_off(ax.x[i], ax.y[i], &ends))
+            continue;
+        run[n++] = i;
+        if (n == RUN_POINTS) {
+            if (!run_clear(&s, &ball, &ax, run, n, runs++))
+                return 0;
+            n = 0;
+        }
+    }
+    return n == 0 || run_clear(&s, &ball, &ax, run, n, runs);
 }

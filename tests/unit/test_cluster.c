@@ -62,8 +62,7 @@ int main(void)
         single.lat = pl.mask.lat;
         qrt_raster_begin(&r, &single, &prm.arm, pl.radius_m, 0.0);
         for (i = 0; i < pl.points.count; i++) {
-            double p[3] = {pl.points.xyz[i][0], pl.points.xyz[i][1],
-                           pl.points.xyz[i][2]};
+            double p[3] = {pl.points.x[i], pl.points.y[i], pl.points.z[i]};
             qrt_raster_point(&r, p);
         }
         for (k = 0; k < 3; k++)

@@ -14,6 +14,8 @@
 #define MAX_MEMBERS 7
 
 static float pts[N_POINTS][3];
+/* the same points by axis, as the clusterer reads them */
+static float axis[3][N_POINTS];
 static int32_t scratch[4 * N_POINTS + 8192];
 static int seen[N_POINTS];
 
@@ -84,6 +86,7 @@ int main(void)
     test_seed(0x5eedULL);
     for (trial = 0; trial < 2 * (int)test_count(3); trial++) {
         struct tally t = {0.0, 0, 0, 0};
+        struct qrt_point_axes ax;
         long n = 200 + (long)test_uniform(0.0, N_POINTS - 200), i, once = 0;
         t.cell = cells[trial % 2];
         for (i = 0; i < n; i++) { /* dense blobs, so that cubes share */
@@ -96,8 +99,15 @@ int main(void)
         CHECK(qrt_cluster_scratch_len(n) <=
                   (long)(sizeof scratch / sizeof scratch[0]),
               "scratch");
-        qrt_cluster_points((const float(*)[3])pts, n, t.cell, MAX_MEMBERS,
-                           scratch, visit, &t);
+        for (i = 0; i < n; i++) {
+            int k;
+            for (k = 0; k < 3; k++)
+                axis[k][i] = pts[i][k];
+        }
+        ax.x = axis[0];
+        ax.y = axis[1];
+        ax.z = axis[2];
+        qrt_cluster_points(&ax, n, t.cell, MAX_MEMBERS, scratch, visit, &t);
         for (i = 0; i < n; i++)
             once += seen[i] == 1;
         CHECK(once == n, "cell %g: %ld of %ld points in exactly one group",

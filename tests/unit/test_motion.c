@@ -2,7 +2,8 @@
  * advancement accepts is free when sampled finely with the reference arm,
  * across the alpha seam too; where the walk fails, the configuration it
  * names collides exactly when the reference arm says so; the clearance
- * equals the reference arm's. Uses the core's internal motion.h. */
+ * equals the reference arm's, wherever in the table the points near the
+ * arm lie. Uses the core's internal motion.h. */
 #include "../../src/core/motion.h"
 #include "check.h"
 #include "qrtplan/qrtplan.h"
@@ -53,14 +54,15 @@ static void check_clearance(void)
         radius[k] = prm.arm.link_radius_m[k] + prm.margin_m;
     for (trial = 0; trial < test_count(300); trial++) {
         double q[3], p[4][3], ref;
-        int link = trial % 3, near = trial % 4;
+        int link = trial % 3, near = trial % 4,
+            place = (int)test_uniform(0.0, CLOUD - 3.5); /* the near ones */
         q[0] = test_uniform(-180, 180);
         q[1] = test_uniform(-40, 180);
         q[2] = test_uniform(-180, 140);
         qrt_arm_fk(&prm.arm, q, p);
         for (i = 0; i < CLOUD; i++) {
             double x[3];
-            if (i < near) { /* near a point of one link */
+            if (i >= place && i < place + near) { /* near a point of one link */
                 double t = test_uniform(0, 1), spread = 0.05 + 0.15 * (i % 3);
                 for (k = 0; k < 3; k++)
                     x[k] = p[link][k] + t * (p[link + 1][k] - p[link][k]) +
@@ -79,9 +81,11 @@ static void check_clearance(void)
         qrt_planner_add_points(&pl, cloud, CLOUD);
         CHECK(pl.points.voxel_m == 0.0, "cloud stored as given");
         /* against the points the table holds (those within reach) */
-        for (i = 0; i < pl.points.count; i++)
-            for (k = 0; k < 3; k++)
-                cloud[3 * i + k] = pl.points.xyz[i][k];
+        for (i = 0; i < pl.points.count; i++) {
+            cloud[3 * i] = pl.points.x[i];
+            cloud[3 * i + 1] = pl.points.y[i];
+            cloud[3 * i + 2] = pl.points.z[i];
+        }
         ref = ref_clearance(q, cloud, pl.points.count, radius);
         for (k = 0; k < 4; k++) {
             double got =
@@ -106,6 +110,79 @@ static void check_clearance(void)
            colliding, capped);
     CHECK(clear >= test_count(300) / 5 && colliding >= test_count(300) / 5,
           "both kinds of arm pose: %d clear, %d colliding", clear, colliding);
+}
+
+/* The clearance's boxes, test by test, at their edges: among far points,
+ * one point (A) clear of the arm by d1 and another (B) by d2 = d1 - u,
+ * u up to 1 cm, each straight out along an axis from the arm's extreme
+ * joint that way: B is inside the box that A's clearance leaves by u,
+ * and decides the answer. B lies on the first entry of a block
+ * of the box test in half the trials. */
+static void check_box_edges(void)
+{
+    enum { EDGE_CLOUD = 300 };
+    static double cloud[3 * EDGE_CLOUD];
+    struct qrt_params prm;
+    double radius[3];
+    int trial, i, k;
+    qrt_params_default(&prm);
+    qrt_planner_init(&pl, &prm);
+    for (k = 0; k < 3; k++)
+        radius[k] = prm.arm.link_radius_m[k] + prm.margin_m;
+    CHECK(radius[0] == radius[1] && radius[1] == radius[2],
+          "the test takes one radius for every link");
+    for (trial = 0; trial < test_count(600); trial++) {
+        /* u under a float's place in half the trials: B then lies on
+         * the box's edge, which the box of floats must not cut */
+        double q[3], p[4][3], d1 = test_uniform(0.01, 0.2), d2, ref, got;
+        int axis = trial % 3, side = trial / 3 % 2 ? 1 : -1, a_at, b_at,
+            high = 0, low = 0, j;
+        d2 = d1 - (trial / 6 % 2 ? test_uniform(1e-4, 0.01)
+                                 : test_uniform(0.0, 4e-8));
+        q[0] = test_uniform(-180, 180);
+        q[1] = test_uniform(-40, 180);
+        q[2] = test_uniform(-180, 140);
+        qrt_arm_fk(&prm.arm, q, p);
+        for (j = 1; j < 4; j++) { /* the extreme joints along the axis */
+            if (p[j][axis] * side > p[high][axis] * side)
+                high = j;
+            if (p[j][axis] * side < p[low][axis] * side)
+                low = j;
+        }
+        for (i = 0; i < EDGE_CLOUD; i++) { /* 1.3 to 1.6 m out: far */
+            double rho = test_uniform(1.3, 1.6), phi = test_uniform(-3.1, 3.1),
+                   el = test_uniform(-1.2, 1.2);
+            cloud[3 * i] = rho * cos(el) * cos(phi);
+            cloud[3 * i + 1] = rho * cos(el) * sin(phi);
+            cloud[3 * i + 2] = rho * sin(el);
+        }
+        a_at = (int)test_uniform(0.0, 63.9);
+        b_at = trial % 2 ? 64 * (1 + (int)test_uniform(0.0, 3.99))
+                         : 64 + (int)test_uniform(0.0, EDGE_CLOUD - 64.1);
+        for (k = 0; k < 3; k++) {
+            cloud[3 * a_at + k] = p[low][k];
+            cloud[3 * b_at + k] = p[high][k];
+        }
+        cloud[3 * a_at + axis] -= side * (radius[low ? low - 1 : 0] + d1);
+        cloud[3 * b_at + axis] += side * (radius[high ? high - 1 : 0] + d2);
+        qrt_points_reset(&pl.points, 10.0); /* the far ones too */
+        CHECK(qrt_points_add(&pl.points, cloud, EDGE_CLOUD) == QRT_OK &&
+                  pl.points.count == EDGE_CLOUD,
+              "every point kept");
+        for (i = 0; i < EDGE_CLOUD; i++) {
+            cloud[3 * i] = pl.points.x[i];
+            cloud[3 * i + 1] = pl.points.y[i];
+            cloud[3 * i + 2] = pl.points.z[i];
+        }
+        ref = ref_clearance(q, cloud, EDGE_CLOUD, radius);
+        got = qrt_clearance_capped(&prm.arm, radius, &pl.points, q, 1e30);
+        CHECK(fabs(ref - d2) < 1e-6, "trial %d: B is %.9g clear, not %.9g",
+              trial, ref, d2);
+        CHECK(fabs(got - ref) < 1e-9,
+              "trial %d: clearance %.12g, reference %.12g (B at %d, axis "
+              "%d, side %d)",
+              trial, got, ref, b_at, axis, side);
+    }
 }
 
 int main(void)
@@ -176,6 +253,7 @@ int main(void)
         }
     }
     check_clearance();
+    check_box_edges();
     printf("motions accepted: mask %d, exact %d\n", accepted_mask,
            accepted_exact);
     CHECK(accepted_mask > test_count(1000) && accepted_exact > test_count(200),

@@ -19,7 +19,10 @@ static void test_exact_then_voxels(void)
     CHECK(pts.voxel_m == 0.0 && pts.count == QRT_MAX_POINTS, "exact %g %ld",
           pts.voxel_m, pts.count);
     for (i = 0; i < QRT_MAX_POINTS; i++)
-        CHECK(fabs(pts.xyz[i][0] - xyz[3 * i]) < 1e-7, "stored exactly");
+        CHECK(fabs(pts.x[i] - xyz[3 * i]) < 1e-7 &&
+                  fabs(pts.y[i] - xyz[3 * i + 1]) < 1e-7 &&
+                  fabs(pts.z[i] - xyz[3 * i + 2]) < 1e-7,
+              "stored exactly");
     CHECK(qrt_points_add(&pts, xyz + 3 * QRT_MAX_POINTS, 5000) == QRT_OK,
           "add more");
     CHECK(pts.voxel_m > 0.0, "switched to voxels");
@@ -30,10 +33,9 @@ static void test_exact_then_voxels(void)
         double best = 1e30;
         long j;
         for (j = 0; j < pts.count; j++) {
-            double d = 0.0;
-            int k;
-            for (k = 0; k < 3; k++)
-                d += pow(pts.xyz[j][k] - xyz[3 * i + k], 2);
+            double d = pow(pts.x[j] - xyz[3 * i], 2) +
+                       pow(pts.y[j] - xyz[3 * i + 1], 2) +
+                       pow(pts.z[j] - xyz[3 * i + 2], 2);
             if (d < best)
                 best = d;
         }
@@ -92,10 +94,10 @@ static void test_each_bad_coordinate(void)
                           pts.ignored_far == 0,
                       "value %d axis %d far %d: nothing counted (%ld %ld %ld)",
                       v, k, far, pts.count, pts.received, pts.ignored_far);
-                for (i = 0; i < 3; i++)
-                    CHECK(pts.xyz[0][i] == (float)first[i],
-                          "value %d axis %d far %d: stored point kept", v, k,
-                          far);
+                CHECK(pts.x[0] == (float)first[0] &&
+                          pts.y[0] == (float)first[1] &&
+                          pts.z[0] == (float)first[2],
+                      "value %d axis %d far %d: stored point kept", v, k, far);
             }
     qrt_points_reset(&pts, 1.0);
     CHECK(qrt_points_add(&pts, extremes, 4) == QRT_OK, "finite extremes");
@@ -185,9 +187,9 @@ static void test_blocks_exact(void)
         for (i = 0; i < n; i++) {
             const double *p = xyz + 3 * i;
             if (p[0] * p[0] + p[1] * p[1] + p[2] * p[2] <= reach * reach) {
-                CHECK(kept < pts.count && pts.xyz[kept][0] == (float)p[0] &&
-                          pts.xyz[kept][1] == (float)p[1] &&
-                          pts.xyz[kept][2] == (float)p[2],
+                CHECK(kept < pts.count && pts.x[kept] == (float)p[0] &&
+                          pts.y[kept] == (float)p[1] &&
+                          pts.z[kept] == (float)p[2],
                       "trial %d: point %ld is stored %ld", trial, i, kept);
                 kept++;
             } else {

@@ -9,8 +9,9 @@
  * wrap), and for no motion at all; and it does
  * prove motions that pass the points with room to spare. A point a hair
  * (1e-9 to 1e-7 m) inside a link at the start stops the proof, however
- * the float test of points off the sweep rounds. Uses the core's internal
- * sweep.h. */
+ * the float test of points off the sweep rounds. In a table of points all
+ * near the sweep and clear of it, one moved onto the arm stops the proof
+ * at every place in the table. Uses the core's internal sweep.h. */
 #include "../../src/core/geom.h"
 #include "../../src/core/sweep.h"
 #include "check.h"
@@ -19,7 +20,16 @@
 
 static struct qrt_planner pl;
 
-enum { CLOUD = 30 };
+/* A motion's own points; before them up to PAD_BEFORE points (a multiple
+ * of 16, so that the patches keep their places among the samples), after
+ * them up to PAD_AFTER, all out of the arm's reach: the test's points fall
+ * anywhere in the blocks and spans the proof scans the table by. */
+enum {
+    CLOUD = 30,
+    PAD_BEFORE = 128,
+    PAD_AFTER = 47,
+    HAIR_CLOUD = 16 + 2 * 64 + 47
+};
 
 static double wrap180(double x)
 {
@@ -98,6 +108,17 @@ static void jitter(const double c[3], double spread, double x[3])
         x[k] = c[k] + d[k];
 }
 
+/* The first n entries of the table, as 3n doubles (x, y, z of each). */
+static void stored_points(const struct qrt_points *pts, long n, double *xyz)
+{
+    long i;
+    for (i = 0; i < n; i++) {
+        xyz[3 * i] = pts->x[i];
+        xyz[3 * i + 1] = pts->y[i];
+        xyz[3 * i + 2] = pts->z[i];
+    }
+}
+
 static void random_joints(double q[3])
 {
     q[0] = test_uniform(-180, 180);
@@ -117,9 +138,9 @@ static void random_joints(double q[3])
 static int hair_inside(const struct qrt_params *prm,
                        const struct qrt_lattice *lat, const double radius[3])
 {
-    double cloud[3 * 16], stored[3 * 16], a[3], b[3], p[4][3], n[2], side,
-        depth, s;
-    int trial, i, k, widest = 0, inside = 0;
+    static double cloud[3 * HAIR_CLOUD], stored[3 * HAIR_CLOUD];
+    double a[3], b[3], p[4][3], n[2], side, depth, s;
+    int trial, i, k, widest = 0, inside = 0, count;
     for (k = 1; k < 3; k++)
         if (radius[k] >= radius[widest])
             widest = k;
@@ -134,22 +155,24 @@ static int hair_inside(const struct qrt_params *prm,
         side = trial % 2 ? 1.0 : -1.0;
         depth = pow(10.0, test_uniform(-9.0, -7.0));
         s = test_uniform(0.2, 0.8);
-        for (i = 0; i < 16; i++) { /* the others 1 m below the base */
+        /* 16 to HAIR_CLOUD points: the hair's place in the table anywhere
+         * (a sample, in a block of the off-sweep test, or after them) */
+        count = 16 + trial % (HAIR_CLOUD - 15);
+        for (i = 0; i < count; i++) { /* the others 1 m below the base */
             cloud[3 * i] = 0.0;
             cloud[3 * i + 1] = 0.0;
             cloud[3 * i + 2] = -1.0 - 0.01 * i;
         }
-        i = trial % 16;
+        i = (int)test_uniform(0.0, count - 0.5);
         for (k = 0; k < 3; k++)
             cloud[3 * i + k] =
                 p[widest][k] + s * (p[widest + 1][k] - p[widest][k]);
         cloud[3 * i] += side * (radius[widest] - depth) * n[0];
         cloud[3 * i + 1] += side * (radius[widest] - depth) * n[1];
         qrt_points_reset(&pl.points, 10.0);
-        CHECK(qrt_points_add(&pl.points, cloud, 16) == QRT_OK, "add");
-        for (k = 0; k < 3 * 16; k++)
-            stored[k] = pl.points.xyz[k / 3][k % 3];
-        if (ref_clearance(a, stored, 16, radius) >= -1e-9)
+        CHECK(qrt_points_add(&pl.points, cloud, count) == QRT_OK, "add");
+        stored_points(&pl.points, count, stored);
+        if (ref_clearance(a, stored, count, radius) >= -1e-9)
             continue; /* rounded to float, it came out */
         inside++;
         CHECK(!qrt_sweep_free(&prm->arm, radius, &pl.points, lat, a, b,
@@ -161,9 +184,59 @@ static int hair_inside(const struct qrt_params *prm,
     return inside;
 }
 
+/* A table whose every point is near the sweep (in the arm's plane, which
+ * stays put, but out of its reach): the proof passes it; and with any one
+ * entry moved onto link 2 at the start, wherever it lies in the runs the
+ * proof gathers and moves on between spans, the proof fails. Returns how
+ * many places were tried. */
+static int every_place(const struct qrt_params *prm,
+                       const struct qrt_lattice *lat, const double radius[3])
+{
+    enum { ALL_NEAR = 21 * 16 + 5 };
+    static double cloud[3 * ALL_NEAR];
+    double a[3], b[3], p[4][3];
+    int trial, i, k, places = 0;
+    for (trial = 0; trial < test_count(4); trial++) {
+        random_joints(a);
+        b[0] = a[0]; /* alpha still: the plane stays put */
+        b[1] = fmin(180, fmax(-40, a[1] + test_uniform(-20, 20)));
+        b[2] = fmin(140, fmax(-180, a[2] + test_uniform(-20, 20)));
+        for (i = 0; i < ALL_NEAR; i++) { /* 1.2 to 2 m out, in the plane */
+            double u = (i % 2 ? 1.0 : -1.0) * test_uniform(1.2, 2.0);
+            cloud[3 * i] = u * cos(a[0] * QRT_DEG);
+            cloud[3 * i + 1] = u * sin(a[0] * QRT_DEG);
+            cloud[3 * i + 2] = test_uniform(-1.0, 1.0);
+        }
+        qrt_points_reset(&pl.points, 10.0);
+        CHECK(qrt_points_add(&pl.points, cloud, ALL_NEAR) == QRT_OK, "add");
+        CHECK(qrt_sweep_free(&prm->arm, radius, &pl.points, lat, a, b,
+                             pl.search.sweep),
+              "trial %d: points all out of reach, yet not proved", trial);
+        ref_fk(a, p);
+        for (i = 0; i < ALL_NEAR; i++) {
+            double keep[3];
+            for (k = 0; k < 3; k++) {
+                keep[k] = cloud[3 * i + k];
+                cloud[3 * i + k] = 0.5 * (p[1][k] + p[2][k]);
+            }
+            qrt_points_reset(&pl.points, 10.0);
+            CHECK(qrt_points_add(&pl.points, cloud, ALL_NEAR) == QRT_OK, "add");
+            CHECK(!qrt_sweep_free(&prm->arm, radius, &pl.points, lat, a, b,
+                                  pl.search.sweep),
+                  "trial %d: entry %d on link 2 at the start, yet proved free",
+                  trial, i);
+            places++;
+            for (k = 0; k < 3; k++)
+                cloud[3 * i + k] = keep[k];
+        }
+    }
+    return places;
+}
+
 int main(void)
 {
-    static double cloud[3 * CLOUD], stored[3 * CLOUD];
+    static double all[3 * (PAD_BEFORE + CLOUD + PAD_AFTER)],
+        stored[3 * (PAD_BEFORE + CLOUD + PAD_AFTER)];
     struct qrt_params prm;
     struct qrt_arm short_alpha; /* alpha in [-180, 175]: it does not wrap */
     struct qrt_lattice lat_wraps, lat_no_wrap;
@@ -190,8 +263,9 @@ int main(void)
          * with room; 3 all with room; 4 patches of 8 points (a scan's
          * surfaces, which the proof takes as runs by one ball each): the
          * first near a link (below), the others with room */
-        int kind = trial % 5, i, steps, free_here, wraps = 1;
-        double centre[3], spot[3], ray[3], ray_offset = 0.0;
+        int kind = trial % 5, i, steps, free_here, wraps = 1, before, after,
+            count;
+        double centre[3], spot[3], ray[3], ray_offset = 0.0, *cloud;
         double a[3], b[3], worst = 1e30;
         random_joints(a);
         random_joints(b);
@@ -216,6 +290,22 @@ int main(void)
             b[0] = test_uniform(120, 175);
         }
         steps = samples_of(a, b, wraps);
+        before = 16 * (int)test_uniform(0.0, PAD_BEFORE / 16 + 0.99);
+        after = (int)test_uniform(0.0, PAD_AFTER + 0.99);
+        count = before + CLOUD + after;
+        cloud = all + 3 * before;
+        for (i = 0; i < before + after; i++) {
+            /* beyond the arm's reach (0.96 m and a radius): clear of every
+             * motion, some off the sweep by its ends, some not */
+            double *x = all + 3 * (i < before ? i : CLOUD + i), d = 0.0;
+            for (k = 0; k < 3; k++) {
+                x[k] = test_uniform(-1.0, 1.0);
+                d += x[k] * x[k];
+            }
+            d = test_uniform(1.1, 2.0) / sqrt(d + 1e-12);
+            for (k = 0; k < 3; k++)
+                x[k] *= d;
+        }
         for (i = 0; i < CLOUD; i++) {
             double *x = cloud + 3 * i;
             if (kind == 0) {
@@ -266,14 +356,13 @@ int main(void)
             }
         }
         qrt_points_reset(&pl.points, 10.0);
-        CHECK(qrt_points_add(&pl.points, cloud, CLOUD) == QRT_OK, "add");
+        CHECK(qrt_points_add(&pl.points, all, count) == QRT_OK, "add");
         /* the reference reads the points as stored (floats) */
-        for (i = 0; i < 3 * CLOUD; i++)
-            stored[i] = pl.points.xyz[i / 3][i % 3];
+        stored_points(&pl.points, count, stored);
         for (i = 0; i <= steps; i++) {
             double q[3];
             config_at(a, b, wraps, i, steps, q);
-            worst = fmin(worst, ref_clearance(q, stored, CLOUD, radius));
+            worst = fmin(worst, ref_clearance(q, stored, count, radius));
         }
         free_here = qrt_sweep_free(&prm.arm, radius, &pl.points,
                                    wraps ? &lat_wraps : &lat_no_wrap, a, b,
@@ -295,6 +384,7 @@ int main(void)
             proved_roomy += free_here;
         }
     }
+    CHECK(every_place(&prm, &lat_wraps, radius) > 0, "no place tried");
     k = hair_inside(&prm, &lat_wraps, radius);
     CHECK(k > test_count(2000) / 2, "only %d points a hair inside", k);
     /* the cases must all have occurred, or the checks above proved little */
