@@ -70,6 +70,15 @@ qrt_points_axes(const struct qrt_points *pts)
     return a;
 }
 
+/* Entry i of a, in double. */
+static inline void qrt_point_at(const struct qrt_point_axes *a, long i,
+                                double p[3])
+{
+    p[0] = a->x[i];
+    p[1] = a->y[i];
+    p[2] = a->z[i];
+}
+
 #ifdef __cplusplus
 }
 #endif

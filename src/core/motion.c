@@ -178,6 +178,7 @@ double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],
                             const struct qrt_points *pts, const double q_deg[3],
                             double cap)
 {
+    struct qrt_point_axes ax = qrt_points_axes(pts);
     double p[4][3], lo[3][3], hi[3][3], arm_lo[3], arm_hi[3], near_lo[3],
         near_hi[3], best = cap, widest = radius_m[0];
     long i;
@@ -217,9 +218,7 @@ double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],
             double x[3];
             if (!in[b])
                 continue;
-            x[0] = pts->x[i + b];
-            x[1] = pts->y[i + b];
-            x[2] = pts->z[i + b];
+            qrt_point_at(&ax, i + b, x);
             if (x[0] < near_lo[0] || x[0] > near_hi[0] || x[1] < near_lo[1] ||
                 x[1] > near_hi[1] || x[2] < near_lo[2] || x[2] > near_hi[2])
                 continue;

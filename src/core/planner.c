@@ -150,11 +150,10 @@ static void raster_part(struct qrt_planner *pl, int part, int nparts,
         qrt_cluster_points(&ctx.ax, pl->points.count, cell, QRT_CLUSTER_MAX,
                            scratch, raster_cluster, &ctx);
     } else {
+        struct qrt_point_axes ax = qrt_points_axes(&pl->points);
         for (i = 0; i < pl->points.count; i++) {
             double p[3];
-            p[0] = pl->points.x[i];
-            p[1] = pl->points.y[i];
-            p[2] = pl->points.z[i];
+            qrt_point_at(&ax, i, p);
             qrt_raster_point(&r, p);
         }
     }

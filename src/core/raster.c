@@ -716,15 +716,6 @@ static void set_alpha_bits(const struct qrt_raster *r, double rho, double phi,
         set_row_range(g->alpha, ranges[i][0], ranges[i][1]);
 }
 
-/* Entry i of ax, in double. */
-static void member_point(const struct qrt_point_axes *ax, int32_t i,
-                         double p[3])
-{
-    p[0] = ax->x[i];
-    p[1] = ax->y[i];
-    p[2] = ax->z[i];
-}
-
 void qrt_raster_cluster_prepare(const struct qrt_raster *r,
                                 const struct qrt_point_axes *ax,
                                 const int32_t *members, int m,
@@ -741,7 +732,7 @@ void qrt_raster_cluster_prepare(const struct qrt_raster *r,
      * passes here once, and arrays indexed by k stayed in memory */
     for (j = 0; j < m; j++) {
         double p[3];
-        member_point(ax, members[j], p);
+        qrt_point_at(ax, members[j], p);
         lo_x = p[0] < lo_x ? p[0] : lo_x;
         hi_x = p[0] > hi_x ? p[0] : hi_x;
         lo_y = p[1] < lo_y ? p[1] : lo_y;
@@ -778,7 +769,7 @@ static int member_plane(const struct qrt_raster *r, int ia,
                         const double *mrho, int j, struct plane *pl)
 {
     double p[3];
-    member_point(ax, members[j], p);
+    qrt_point_at(ax, members[j], p);
     return plane_at(r, ia, p, mrho[j], 0.0, pl);
 }
 
@@ -826,7 +817,7 @@ void qrt_raster_member_discs(const struct qrt_raster *r,
     for (j = 0; j < m; j++) { /* only link 3's disc (plane_at's dc) */
         struct plane pl;
         double p[3];
-        member_point(ax, members[j], p);
+        qrt_point_at(ax, members[j], p);
         md[j].reach3 = -1.0f;
         if (plane_or_disc_at(r, ia, p, mrho[j], 0.0, 1, &pl))
             md[j] = pl.dc;
@@ -1006,7 +997,7 @@ void qrt_raster_cluster(const struct qrt_raster *r,
         /* the clusterer never emits more, but every point must still count */
         for (j = 0; j < m; j++) {
             double p[3];
-            member_point(ax, members[j], p);
+            qrt_point_at(ax, members[j], p);
             qrt_raster_point(r, p);
         }
         return;

@@ -282,9 +282,7 @@ static int stored_near_clear(struct sweep *s, const struct qrt_point_axes *ax,
                              long i)
 {
     double p[3];
-    p[0] = ax->x[i];
-    p[1] = ax->y[i];
-    p[2] = ax->z[i];
+    qrt_point_at(ax, i, p);
     return near_clear(s, p);
 }
 
