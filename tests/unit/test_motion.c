@@ -8,6 +8,7 @@
 #include "check.h"
 #include "qrtplan/qrtplan.h"
 #include "ref_arm.h"
+#include "stored_points.h"
 
 static struct qrt_planner pl;
 
@@ -81,11 +82,7 @@ static void check_clearance(void)
         qrt_planner_add_points(&pl, cloud, CLOUD);
         CHECK(pl.points.voxel_m == 0.0, "cloud stored as given");
         /* against the points the table holds (those within reach) */
-        for (i = 0; i < pl.points.count; i++) {
-            cloud[3 * i] = pl.points.x[i];
-            cloud[3 * i + 1] = pl.points.y[i];
-            cloud[3 * i + 2] = pl.points.z[i];
-        }
+        stored_points(&pl.points, pl.points.count, cloud);
         ref = ref_clearance(q, cloud, pl.points.count, radius);
         for (k = 0; k < 4; k++) {
             double got =
@@ -169,11 +166,7 @@ static void check_box_edges(void)
         CHECK(qrt_points_add(&pl.points, cloud, EDGE_CLOUD) == QRT_OK &&
                   pl.points.count == EDGE_CLOUD,
               "every point kept");
-        for (i = 0; i < EDGE_CLOUD; i++) {
-            cloud[3 * i] = pl.points.x[i];
-            cloud[3 * i + 1] = pl.points.y[i];
-            cloud[3 * i + 2] = pl.points.z[i];
-        }
+        stored_points(&pl.points, EDGE_CLOUD, cloud);
         ref = ref_clearance(q, cloud, EDGE_CLOUD, radius);
         got = qrt_clearance_capped(&prm.arm, radius, &pl.points, q, 1e30);
         CHECK(fabs(ref - d2) < 1e-6, "trial %d: B is %.9g clear, not %.9g",

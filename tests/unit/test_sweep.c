@@ -17,6 +17,7 @@
 #include "check.h"
 #include "qrtplan/qrtplan.h"
 #include "ref_arm.h"
+#include "stored_points.h"
 
 static struct qrt_planner pl;
 
@@ -106,17 +107,6 @@ static void jitter(const double c[3], double spread, double x[3])
     } while (d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > spread * spread);
     for (k = 0; k < 3; k++)
         x[k] = c[k] + d[k];
-}
-
-/* The first n entries of the table, as 3n doubles (x, y, z of each). */
-static void stored_points(const struct qrt_points *pts, long n, double *xyz)
-{
-    long i;
-    for (i = 0; i < n; i++) {
-        xyz[3 * i] = pts->x[i];
-        xyz[3 * i + 1] = pts->y[i];
-        xyz[3 * i + 2] = pts->z[i];
-    }
 }
 
 static void random_joints(double q[3])
