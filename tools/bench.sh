@@ -43,8 +43,12 @@ if [ -x build/bin/qrtpland ] && [ -x build/bin/servo_sim ]; then
         grep -E "quick-stop frame|failures" | tee -a "$out/table5.txt" || true
 fi
 
-# qrtplan against OMPL (issue 6): the same scenes, interleaved, oracle-checked
+# qrtplan against OMPL (issue 6): the same scenes, interleaved, oracle-checked;
+# in turn (each planner after the others), then replanning (each planner
+# after its own plan of the scan before)
 if [ -x build/bin/bench_ompl ]; then
     .venv/bin/python tools/bench_compare.py --repeats "${QRT_BENCH_OMPL_REPEATS:-15}" \
         --out "$out" | tee "$out/ompl_summary.txt"
+    .venv/bin/python tools/bench_compare.py --repeats "${QRT_BENCH_OMPL_REPEATS:-15}" \
+        --replanning --out "$out" | tee "$out/ompl_summary_replanning.txt"
 fi

@@ -11,7 +11,12 @@ ompl_per_scene.csv (per scene, qrtplan against RRTConnect),
 ompl_compare.png (per family) and ompl_per_scene.png (each scene's speed-up
 beside the 1x and 10x lines).
 
-    .venv/bin/python tools/bench_compare.py [--repeats R] [--seeds N]
+With --replanning, each planner first plans the scan before (the same scene,
+every coordinate moved by up to 2 mm) untimed, as in a loop that replans on
+every scan (bench_ompl's header says what the default regime leaves each
+planner with), and the files are named ompl_*_replanning.*.
+
+    .venv/bin/python tools/bench_compare.py [--repeats R] [--seeds N] [--replanning]
     .venv/bin/python tools/bench_compare.py --smoke      # a few seconds, for make test
 """
 import argparse
@@ -134,17 +139,24 @@ def main():
     ap.add_argument("--bench-ompl", default=os.path.join(REPO, "build", "bin", "bench_ompl"))
     ap.add_argument("--qrtplan", default=None)
     ap.add_argument("--out", default=os.path.join(REPO, "build", "bench"))
+    ap.add_argument("--replanning", action="store_true",
+                    help="each planner first plans the scan before, untimed")
     args = ap.parse_args()
+    suffix = "_replanning" if args.replanning else ""
+    regime = ("replanning: each planner right after its own plan of the scan before"
+              if args.replanning else "in turn: each planner right after the others")
+    print(f"regime: {regime}")
     qrtplan = args.qrtplan or os.path.join(os.path.dirname(args.bench_ompl), "qrtplan")
     if args.smoke:
         args.repeats, args.time_limit = 1, 2.0
     made = make_scenes(os.path.join(args.out, "ompl_scenes"), args.seeds, qrtplan,
                        args.smoke)
     family_of = {p: fam for fam, p in made}
-    raw = os.path.join(args.out, "ompl_compare.csv")
+    raw = os.path.join(args.out, f"ompl_compare{suffix}.csv")
     subprocess.run([args.bench_ompl, "--repeats", str(args.repeats), "--time-limit",
-                    str(args.time_limit), "--csv", raw] + [p for _, p in made],
-                   check=True)
+                    str(args.time_limit), "--csv", raw]
+                   + (["--replanning"] if args.replanning else [])
+                   + [p for _, p in made], check=True)
     rows = list(csv.DictReader(open(raw)))
     assert rows, "bench_ompl wrote no rows"
     stats = defaultdict(lambda: {"time": [], "len": [], "ok": 0, "n": 0, "safe": 0})
@@ -166,7 +178,7 @@ def main():
         if r["planner"] == "qrtplan" and not safe:
             problems.append(f"qrtplan path on {r['scene']} fails the oracle")
     fams = list(dict.fromkeys(f for f, _ in made))
-    summary = os.path.join(args.out, "ompl_summary.csv")
+    summary = os.path.join(args.out, f"ompl_summary{suffix}.csv")
     lines = []
     with open(summary, "w", newline="") as f:
         w = csv.writer(f)
@@ -198,10 +210,11 @@ def main():
                   f"{np.median(ours['len']):.0f} (qrtplan) vs "
                   f"{np.median(rrt['len']):.0f} deg (RRTConnect)")
     speedups = per_scene(rows, family_of, made,
-                         os.path.join(args.out, "ompl_per_scene.csv"))
+                         os.path.join(args.out, f"ompl_per_scene{suffix}.csv"))
     # drawn in the smoke run too, so that make test runs the plotting code
-    plot(lines, fams, os.path.join(args.out, "ompl_compare.png"))
-    plot_per_scene(speedups, fams, os.path.join(args.out, "ompl_per_scene.png"))
+    plot(lines, fams, os.path.join(args.out, f"ompl_compare{suffix}.png"), regime)
+    plot_per_scene(speedups, fams, os.path.join(args.out, f"ompl_per_scene{suffix}.png"),
+                   regime)
     for p in problems:
         print("FAIL", p)
     return 1 if problems else 0
@@ -240,7 +253,7 @@ def per_scene(rows, family_of, made, path):
     return speedups
 
 
-def plot_per_scene(speedups, fams, path):
+def plot_per_scene(speedups, fams, path, regime):
     """Each scene's speed-up over RRTConnect on a log axis, coloured by
     family, with the 1x (level) and 10x (the issue's target) lines: the
     picture of where qrtplan is ahead and by how much."""
@@ -271,7 +284,7 @@ def plot_per_scene(speedups, fams, path):
     ax.text(1.02, y[0] + 0.7, "level", fontsize=8)
     ax.text(10.2, y[0] + 0.7, "10x target", fontsize=8, color="grey")
     ax.set_xlabel("RRTConnect median time / qrtplan median time (log; > 1: qrtplan ahead)")
-    ax.set_title("speed-up over RRTConnect, scene by scene")
+    ax.set_title(f"speed-up over RRTConnect, scene by scene\n({regime})", fontsize=10)
     handles = [plt.Rectangle((0, 0), 1, 1, color=colours[f]) for f in fams]
     # outside the axes: inside, it covered the labels of the last bars
     ax.legend(handles, fams, fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
@@ -280,7 +293,7 @@ def plot_per_scene(speedups, fams, path):
     fig.savefig(path, dpi=110, bbox_inches="tight")
 
 
-def plot(lines, fams, path):
+def plot(lines, fams, path, regime):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -311,6 +324,7 @@ def plot(lines, fams, path):
         a.grid(axis="y", alpha=0.3)
     ax[0].set_title("time to first path (RRT*: 1 s budget)")
     ax[1].set_title("path length")
+    fig.suptitle(regime, fontsize=10)
     # one legend for both panels, under them: inside, it covered the bars
     handles, labels = ax[0].get_legend_handles_labels()
     fig.legend(handles, labels, fontsize=8, loc="upper center", ncol=len(labels),
