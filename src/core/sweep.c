@@ -22,8 +22,13 @@
 /* Clearance at or under this (metres) counts as contact, as in motion.c. */
 #define CONTACT_M 1e-7
 /* Every 16th point is tried first: a motion is seldom blocked by one
- * point alone, so a blocked one is usually told from a sample. */
+ * point alone, so a blocked one is usually told from a sample. The samples
+ * near the sweep are tried SAMPLE_RUN at a time, by one ball that holds
+ * them, then one by one: 8 samples span 128 entries, in a scan often a patch
+ * small enough for the ball to clear (one by one they took a sixth of an
+ * open shelf's plan), and a run that fails costs one ball more than before. */
 #define SAMPLE_STRIDE 16
+#define SAMPLE_RUN 8
 /* The off-sweep test is made on blocks of this many entries (a multiple of
  * SAMPLE_STRIDE, so that a block's samples are its entries 0, 16, ...). */
 #define OFF_BLOCK 64
@@ -312,12 +317,6 @@ static int float_off(float x, float y, const struct float_ends *f)
     return fabsf(along_sum) - fabsf(along_diff) > f->wall2;
 }
 
-static int point_clear(struct sweep *s, const struct qrt_point_axes *ax, long i)
-{
-    return float_off(ax->x[i], ax->y[i], &s->ends) ||
-           stored_near_clear(s, ax, i);
-}
-
 /* Of the OFF_BLOCK entries from `at` on, mark in near[] those float_off
  * does not put off the sweep, and count them in each span of
  * SAMPLE_STRIDE entries, leaving out the span's first (its sample, tried
@@ -411,17 +410,17 @@ static void box_merge(struct box *into, const struct box *b)
 }
 
 /* The table's entries run[0..n-1], none off the sweep by its ends: as one ball,
- * else as two halves, each as a ball, and so on down to RUN_GROUP points,
- * else one by one; depth first, from a small stack of spans (no
- * recursion). Every span starts on a group's first point and ends at a
- * group's end or at n, so its groups' boxes merged are exactly its box.
- * Balls of a size are tried while they clear at least a third of the time
+ * else as two halves, each as a ball, and so on down to RUN_GROUP points
+ * (balls of at most `levels` sizes), else one by one; depth first, from a small
+ * stack of spans (no recursion). Every span starts on a group's first point and
+ * ends at a group's end or at n, so its groups' boxes merged are exactly its
+ * box. Balls of a size are tried while they clear at least a third of the time
  * (and on every 16th run, so that a scene whose first runs were wide can
  * come back to them): in a table with no order in space, or where the
  * motion brushes past the points, their boxes are only cost. */
 static int run_clear(struct sweep *s, struct sweep *ball,
                      const struct qrt_point_axes *ax, const long *run, int n,
-                     long runs)
+                     long runs, int levels)
 {
     struct box group[RUN_POINTS / RUN_GROUP], b;
     int first_of[RUN_LEVELS], count_of[RUN_LEVELS], level_of[RUN_LEVELS];
@@ -452,7 +451,7 @@ static int run_clear(struct sweep *s, struct sweep *ball,
         }
         /* (the level's test is never needed: halving 32 points three
          * times leaves at most 4; it keeps the stack's bound plain) */
-        if (m <= RUN_GROUP || level + 1 >= RUN_LEVELS) {
+        if (m <= RUN_GROUP || level + 1 >= levels) {
             for (i = first; i < first + m; i++)
                 if (!stored_near_clear(s, ax, run[i]))
                     return 0;
@@ -475,7 +474,7 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
                    const double a_deg[3], const double b_deg[3],
                    struct qrt_sweep_leaf *leaves)
 {
-    struct sweep s, ball;
+    struct sweep s, ball, sample_ball;
     struct float_ends ends;
     struct qrt_point_axes ax = qrt_points_axes(pts);
     double d[3], fastest;
@@ -515,13 +514,26 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
     store_leaves(&s, leaves);
     for (k = 0; k < RUN_POINTS + SAMPLE_STRIDE; k++)
         run[k] = 0; /* (the rest of a run is moved as a fixed count) */
-    for (i = 0; i < pts->count; i += SAMPLE_STRIDE)
-        if (!point_clear(&s, &ax, i))
-            return 0;
-    /* the balls' steps are counted apart: they only save work */
+    /* the balls' steps are counted apart: they only save work; the
+     * samples' balls keep their own counts of how often they clear */
     ball = s;
     ball.max_steps = RUN_STEPS;
     ball.steps_left = STEPS_MEAN * pts->count + STEPS_START;
+    sample_ball = ball;
+    for (i = 0; i < pts->count; i += SAMPLE_STRIDE) {
+        if (float_off(ax.x[i], ax.y[i], &s.ends))
+            continue;
+        run[n++] = i;
+        if (n == SAMPLE_RUN) {
+            if (!run_clear(&s, &sample_ball, &ax, run, n, runs++, 1))
+                return 0;
+            n = 0;
+        }
+    }
+    if (n > 0 && !run_clear(&s, &sample_ball, &ax, run, n, runs, 1))
+        return 0;
+    n = 0;
+    runs = 0;
     /* every point but the samples, with what the test reads in a local
      * (run_clear is passed &s, so s's fields would be loaded again): in
      * blocks marked by mark_near, then the last entries one by one */
@@ -540,7 +552,8 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
                 n += mark[j];
             }
             if (n >= RUN_POINTS) { /* a run of RUN_POINTS; the rest kept */
-                if (!run_clear(&s, &ball, &ax, run, RUN_POINTS, runs++))
+                if (!run_clear(&s, &ball, &ax, run, RUN_POINTS, runs++,
+                               RUN_LEVELS))
                     return 0;
                 n -= RUN_POINTS;
                 /* the rest, at most SAMPLE_STRIDE - 2 (n was under
@@ -556,10 +569,10 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
             continue;
         run[n++] = i;
         if (n == RUN_POINTS) {
-            if (!run_clear(&s, &ball, &ax, run, n, runs++))
+            if (!run_clear(&s, &ball, &ax, run, n, runs++, RUN_LEVELS))
                 return 0;
             n = 0;
         }
     }
-    return n == 0 || run_clear(&s, &ball, &ax, run, n, runs);
+    return n == 0 || run_clear(&s, &ball, &ax, run, n, runs, RUN_LEVELS);
 }

@@ -175,17 +175,19 @@ static int hair_inside(const struct qrt_params *prm,
 }
 
 /* A table whose every point is near the sweep (in the arm's plane, which
- * stays put, but out of its reach): the proof passes it; and with any one
- * entry moved onto link 2 at the start, wherever it lies in the runs the
- * proof gathers and moves on between spans, the proof fails. Returns how
- * many places were tried. */
+ * stays put, but out of its reach), then either nothing or OFF_TAIL points
+ * off it (across the plane), so that the last sample is near it or off it:
+ * the proof passes it; and with any one near entry moved onto link 2 at the
+ * start, wherever it lies in the runs the proof gathers and moves on between
+ * spans, or among the samples' runs, the proof fails. Returns how many
+ * places were tried. */
 static int every_place(const struct qrt_params *prm,
                        const struct qrt_lattice *lat, const double radius[3])
 {
-    enum { ALL_NEAR = 21 * 16 + 5 };
-    static double cloud[3 * ALL_NEAR];
+    enum { ALL_NEAR = 21 * 16 + 5, OFF_TAIL = 20 };
+    static double cloud[3 * (ALL_NEAR + OFF_TAIL)];
     double a[3], b[3], p[4][3];
-    int trial, i, k, places = 0;
+    int trial, i, k, tail, places = 0;
     for (trial = 0; trial < test_count(4); trial++) {
         random_joints(a);
         b[0] = a[0]; /* alpha still: the plane stays put */
@@ -197,27 +199,37 @@ static int every_place(const struct qrt_params *prm,
             cloud[3 * i + 1] = u * sin(a[0] * QRT_DEG);
             cloud[3 * i + 2] = test_uniform(-1.0, 1.0);
         }
-        qrt_points_reset(&pl.points, 10.0);
-        CHECK(qrt_points_add(&pl.points, cloud, ALL_NEAR) == QRT_OK, "add");
-        CHECK(qrt_sweep_free(&prm->arm, radius, &pl.points, lat, a, b,
-                             pl.search.sweep),
-              "trial %d: points all out of reach, yet not proved", trial);
+        for (; i < ALL_NEAR + OFF_TAIL; i++) { /* 1.5 m across the plane */
+            cloud[3 * i] = -1.5 * sin(a[0] * QRT_DEG);
+            cloud[3 * i + 1] = 1.5 * cos(a[0] * QRT_DEG);
+            cloud[3 * i + 2] = test_uniform(-1.0, 1.0);
+        }
         ref_fk(a, p);
-        for (i = 0; i < ALL_NEAR; i++) {
-            double keep[3];
-            for (k = 0; k < 3; k++) {
-                keep[k] = cloud[3 * i + k];
-                cloud[3 * i + k] = 0.5 * (p[1][k] + p[2][k]);
-            }
+        for (tail = 0; tail <= OFF_TAIL; tail += OFF_TAIL) {
+            int count = ALL_NEAR + tail;
             qrt_points_reset(&pl.points, 10.0);
-            CHECK(qrt_points_add(&pl.points, cloud, ALL_NEAR) == QRT_OK, "add");
-            CHECK(!qrt_sweep_free(&prm->arm, radius, &pl.points, lat, a, b,
-                                  pl.search.sweep),
-                  "trial %d: entry %d on link 2 at the start, yet proved free",
-                  trial, i);
-            places++;
-            for (k = 0; k < 3; k++)
-                cloud[3 * i + k] = keep[k];
+            CHECK(qrt_points_add(&pl.points, cloud, count) == QRT_OK, "add");
+            CHECK(qrt_sweep_free(&prm->arm, radius, &pl.points, lat, a, b,
+                                 pl.search.sweep),
+                  "trial %d: points all out of reach, yet not proved", trial);
+            for (i = 0; i < ALL_NEAR; i++) {
+                double keep[3];
+                for (k = 0; k < 3; k++) {
+                    keep[k] = cloud[3 * i + k];
+                    cloud[3 * i + k] = 0.5 * (p[1][k] + p[2][k]);
+                }
+                qrt_points_reset(&pl.points, 10.0);
+                CHECK(qrt_points_add(&pl.points, cloud, count) == QRT_OK,
+                      "add");
+                CHECK(!qrt_sweep_free(&prm->arm, radius, &pl.points, lat, a, b,
+                                      pl.search.sweep),
+                      "trial %d: entry %d of %d on link 2 at the start, yet "
+                      "proved free",
+                      trial, i, count);
+                places++;
+                for (k = 0; k < 3; k++)
+                    cloud[3 * i + k] = keep[k];
+            }
         }
     }
     return places;
