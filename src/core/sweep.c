@@ -320,8 +320,8 @@ static int float_off(float x, float y, const struct float_ends *f)
 /* Of the OFF_BLOCK entries from `at` on, mark in near[] those float_off
  * does not put off the sweep, and count them in each span of
  * SAMPLE_STRIDE entries, leaving out the span's first (its sample, tried
- * on its own). Loops of fixed count with no branch over two axes: the
- * compiler makes them 4 lanes wide. */
+ * before, with the other samples). Loops of fixed count with no branch over two
+ * axes: the compiler makes them 4 lanes wide. */
 static void mark_near(const struct qrt_point_axes *ax, long at,
                       const struct float_ends *f, int near[OFF_BLOCK],
                       int count[OFF_SPANS])
@@ -520,8 +520,11 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
     ball.max_steps = RUN_STEPS;
     ball.steps_left = STEPS_MEAN * pts->count + STEPS_START;
     sample_ball = ball;
+    /* what the off-sweep test reads, in a local (run_clear is passed &s,
+     * so s's fields would be loaded again for every point) */
+    ends = s.ends;
     for (i = 0; i < pts->count; i += SAMPLE_STRIDE) {
-        if (float_off(ax.x[i], ax.y[i], &s.ends))
+        if (float_off(ax.x[i], ax.y[i], &ends))
             continue;
         run[n++] = i;
         if (n == SAMPLE_RUN) {
@@ -534,10 +537,8 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
         return 0;
     n = 0;
     runs = 0;
-    /* every point but the samples, with what the test reads in a local
-     * (run_clear is passed &s, so s's fields would be loaded again): in
-     * blocks marked by mark_near, then the last entries one by one */
-    ends = s.ends;
+    /* every point but the samples: in blocks marked by mark_near, then the
+     * last entries one by one */
     for (i = 0; i + OFF_BLOCK <= pts->count; i += OFF_BLOCK) {
         int near[OFF_BLOCK], count[OFF_SPANS], b, j;
         mark_near(&ax, i, &ends, near, count);
