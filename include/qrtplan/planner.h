@@ -67,9 +67,12 @@ struct qrt_plan {
     double voxel_m; /* 0 while points are exact */
 };
 
+/* The node first and the key as its float's bits, so that the search
+ * reads an entry's order as one 64-bit word where the target is
+ * little-endian (src/core/search.c, heap_rank). */
 struct qrt_heap_entry {
-    float key; /* cost so far plus the A* estimate */
     int32_t node;
+    uint32_t key_bits; /* cost so far plus the A* estimate */
 };
 
 /* A cluster of nearby points, prepared once so that its cells can be

@@ -894,13 +894,25 @@ static inline void node_sector_of(const struct qrt_raster *r, int is, int ie,
     ns->ez = r->elbow[is][1];
 }
 
-/* node_meets(view_from_elbow(dc)) with the node's sector loaded once. */
+/* node_meets(view_from_elbow(dc)) with the node's sector loaded once,
+ * and sector_meets' rejection of a disc beyond one edge's line tried
+ * first: it ends nine in ten of the tests a free node's question makes (on
+ * the box scenes). It gives what the full test gives: it is the same sum,
+ * and a disc it rejects is neither out of link 3's reach (0 too) nor over
+ * the elbow (view_from's 2), whose centre lies within reach of every line
+ * through the elbow. */
 static inline int disc_meets_node(const struct qrt_raster *r,
                                   const struct node_sector *ns,
                                   const struct qrt_disc *dc)
 {
     struct elbow_view ev;
-    int seen = view_from(r, ns->eu, ns->ez, dc, &ev);
+    double wu = dc->cu - ns->eu, wz = dc->z - ns->ez;
+    double out = -(dc->reach3 + r->sector_eps) * (1.0 + 1e-6);
+    int seen;
+    if (ns->e[0] * wz - ns->e[1] * wu < out ||
+        wu * ns->e[3] - wz * ns->e[2] < out)
+        return 0;
+    seen = view_from(r, ns->eu, ns->ez, dc, &ev);
     if (seen != 1)
         return seen == 2;
     return sector_meets(r, ns->e, &ev);

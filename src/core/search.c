@@ -34,20 +34,38 @@ static inline int32_t place_of(const struct qrt_planner *pl, long node)
     return seen_node(pl, node) ? pl->heap_pos[node] : -1;
 }
 
+/* A key's bits, and back. */
+static inline uint32_t key_bits(float key)
+{
+    union {
+        float f;
+        uint32_t u;
+    } k;
+    k.f = key;
+    return k.u;
+}
+
+static inline float key_of(const struct qrt_heap_entry *e)
+{
+    union {
+        float f;
+        uint32_t u;
+    } k;
+    k.u = e->key_bits;
+    return k.f;
+}
+
 /* An entry's place in the heap's order as one integer: its key's bits,
  * then its node. Keys are never negative, NaN or -0 (a cost so far plus an
  * estimate clamped at +0), and the bits of such floats order as the
  * floats do, so this is the order of (key, node), ties broken by node
  * index so that every platform expands alike; one compare, with no
- * branch, where two compares of floats and a tie test mispredicted. */
+ * branch, where two compares of floats and a tie test mispredicted. The
+ * entry keeps the key as bits behind the node, so that on a little-endian
+ * target the compiler reads the two halves as one word. */
 static inline uint64_t heap_rank(const struct qrt_heap_entry *e)
 {
-    union {
-        float f;
-        uint32_t u;
-    } key;
-    key.f = e->key;
-    return ((uint64_t)key.u << 32) | (uint32_t)e->node;
+    return ((uint64_t)e->key_bits << 32) | (uint32_t)e->node;
 }
 
 static int heap_less(const struct qrt_heap_entry *a,
@@ -89,12 +107,24 @@ static void sift_down(struct qrt_planner *pl, long i, long size)
         if (c >= size)
             break;
         least_rank = heap_rank(&h[c]);
-        /* the least child, by selects rather than branches */
-        for (j = c + 1; j < c + 4 && j < size; j++) {
-            uint64_t r = heap_rank(&h[j]);
-            int less = r < least_rank;
-            least = less ? j : least;
-            least_rank = less ? r : least_rank;
+        /* the least child, by selects rather than branches: of four, as
+         * two pairs, so that the compares do not wait on each other */
+        if (c + 3 < size) {
+            uint64_t r1 = heap_rank(&h[c + 1]), r2 = heap_rank(&h[c + 2]);
+            uint64_t r3 = heap_rank(&h[c + 3]);
+            long low23 = r3 < r2 ? c + 3 : c + 2;
+            uint64_t rank23 = r3 < r2 ? r3 : r2;
+            least = r1 < least_rank ? c + 1 : c;
+            least_rank = r1 < least_rank ? r1 : least_rank;
+            least = rank23 < least_rank ? low23 : least;
+            least_rank = rank23 < least_rank ? rank23 : least_rank;
+        } else {
+            for (j = c + 1; j < size; j++) {
+                uint64_t r = heap_rank(&h[j]);
+                int less = r < least_rank;
+                least = less ? j : least;
+                least_rank = less ? r : least_rank;
+            }
         }
         if (least_rank >= rank)
             break;
@@ -110,7 +140,7 @@ static void push_or_lower(struct qrt_planner *pl, long *size, long node,
                           float key)
 {
     struct qrt_heap_entry e;
-    e.key = key;
+    e.key_bits = key_bits(key);
     e.node = (int32_t)node;
     if (place_of(pl, node) >= 0) {
         pl->open.heap[pl->heap_pos[node]] = e;
@@ -343,6 +373,37 @@ static uint32_t moves_after(const struct moves *mv, unsigned came)
     return out;
 }
 
+/* The moves from ijk that stay on the lattice: all but those stepping off
+ * a face, alpha's ends being faces only where it does not wrap. A node on
+ * a face then takes its moves as an inside node does, but for the index of
+ * a move across alpha's seam. */
+static uint32_t moves_on(const struct qrt_lattice *lat, const struct moves *mv,
+                         const int ijk[3])
+{
+    uint32_t on = (1UL << 26) - 1U;
+    int j;
+    for (j = lat->alpha_wraps ? 1 : 0; j < 3; j++) {
+        if (ijk[j] == 0)
+            on &= ~mv->toward[j][0];
+        if (ijk[j] == lat->n[j] - 1)
+            on &= ~mv->toward[j][1];
+    }
+    return on;
+}
+
+/* Index v of a move from ijk that steps da on alpha, made right where the
+ * move crosses alpha's seam (a turn back or on; moves_on lets it only
+ * where alpha wraps). */
+static inline long across_seam(const struct qrt_lattice *lat, const int ijk[3],
+                               int da, long v)
+{
+    int a = ijk[0] + da;
+    long turn = (long)lat->n[0] * lat->n[1] * lat->n[2];
+    if (a < 0)
+        return v + turn;
+    return a >= lat->n[0] ? v - turn : v;
+}
+
 /* One best-first search from seeds. With goals, it ends when nothing left
  * can beat the best goal reached (res); with region instead, it records the
  * nodes it settles there and ends when the region is full (a Dijkstra from
@@ -358,9 +419,15 @@ static void search_from(struct qrt_planner *pl, const struct moves *mv,
     long n_nodes = qrt_lattice_node_count(lat), size = 0, i;
     double best = HUGE_VAL;
     int inside;
+    /* the alpha nodes of the goals: a node on none is no goal */
+    uint64_t goal_alpha[QRT_ALPHA_WORDS] = {0};
 
     for (i = 0; i < (n_nodes + 63) / 64; i++)
         pl->search_seen[i] = 0;
+    for (i = 0; goals && i < goals->count; i++) {
+        int a = (int)(goals->node[i] / ((long)lat->n[1] * lat->n[2]));
+        goal_alpha[a >> 6] |= 1ULL << (a & 63);
+    }
     for (i = 0; i < seeds->count; i++) {
         long node = seeds->node[i];
         int ijk[3];
@@ -381,7 +448,7 @@ static void search_from(struct qrt_planner *pl, const struct moves *mv,
         long u = top.node;
         int ijk[3], slot, d;
         uint32_t todo;
-        if ((double)top.key >= best)
+        if ((double)key_of(&top) >= best)
             break; /* nothing left on the heap can beat the best goal */
         pl->heap_pos[u] = -2;
         size--;
@@ -403,7 +470,8 @@ static void search_from(struct qrt_planner *pl, const struct moves *mv,
             region->cost[region->settled] = pl->search.dist[u];
             if (++region->settled == QRT_GOAL_REGION_NODES)
                 break;
-        } else if (goals && (slot = goal_slot(goals, u)) >= 0 &&
+        } else if (((goal_alpha[ijk[0] >> 6] >> (ijk[0] & 63)) & 1U) &&
+                   (slot = goal_slot(goals, u)) >= 0 &&
                    (double)pl->search.dist[u] + goals->cost[slot] < best) {
             best = (double)pl->search.dist[u] + goals->cost[slot];
             res->found = 1;
@@ -414,31 +482,34 @@ static void search_from(struct qrt_planner *pl, const struct moves *mv,
          * its index is an offset from u */
         inside = ijk[0] > 0 && ijk[0] < lat->n[0] - 1 && ijk[1] > 0 &&
                  ijk[1] < lat->n[1] - 1 && ijk[2] > 0 && ijk[2] < lat->n[2] - 1;
-        for (todo = moves_after(mv, pl->parent_dir[u]); todo != 0;
-             todo &= todo - 1U) {
+        todo = moves_after(mv, pl->parent_dir[u]);
+        if (!inside)
+            todo &= moves_on(lat, mv, ijk);
+        for (; todo != 0; todo &= todo - 1U) {
             int nb[3];
             int32_t place;
             long v;
             float g;
             double key;
             d = qrt_lowest_bit(todo);
-            if (inside) {
-                nb[0] = ijk[0] + mv->offset[d][0];
-                nb[1] = ijk[1] + mv->offset[d][1];
-                nb[2] = ijk[2] + mv->offset[d][2];
-                v = u + mv->delta[d];
-            } else if ((v = neighbour(lat, ijk, mv->offset[d], nb)) < 0) {
-                continue;
-            }
+            v = u + mv->delta[d];
+            if (!inside)
+                v = across_seam(lat, ijk, mv->offset[d][0], v);
+            /* the tests by index first: most moves end at one of them */
             place = place_of(pl, v);
             if (place == -2)
                 continue;
+            g = pl->search.dist[u] + mv->cost[d];
+            if (place >= 0 && pl->search.dist[v] <= g)
+                continue;
+            nb[0] = ijk[0] + mv->offset[d][0];
+            nb[1] = ijk[1] + mv->offset[d][1];
+            nb[2] = ijk[2] + mv->offset[d][2];
+            if (!inside && (nb[0] < 0 || nb[0] >= lat->n[0]))
+                nb[0] += nb[0] < 0 ? lat->n[0] : -lat->n[0];
             /* a bit set is final even in a row not built yet; a node not
              * known yet is checked when taken */
             if (qrt_mask_bit(&pl->mask, nb))
-                continue;
-            g = pl->search.dist[u] + mv->cost[d];
-            if (place >= 0 && pl->search.dist[v] <= g)
                 continue;
             key = (double)g + estimate_at(est, lat, nb, v);
             if (key == HUGE_VAL)
