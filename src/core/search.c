@@ -391,17 +391,14 @@ static uint32_t moves_on(const struct qrt_lattice *lat, const struct moves *mv,
     return on;
 }
 
-/* Index v of a move from ijk that steps da on alpha, made right where the
- * move crosses alpha's seam (a turn back or on; moves_on lets it only
- * where alpha wraps). */
-static inline long across_seam(const struct qrt_lattice *lat, const int ijk[3],
-                               int da, long v)
+/* The turns to add to alpha coordinate a, one past an end of the lattice
+ * after a move across alpha's seam (moves_on lets one only where alpha
+ * wraps): +1 below node 0, -1 above the last, else 0. */
+static inline int seam_turns(const struct qrt_lattice *lat, int a)
 {
-    int a = ijk[0] + da;
-    long turn = (long)lat->n[0] * lat->n[1] * lat->n[2];
     if (a < 0)
-        return v + turn;
-    return a >= lat->n[0] ? v - turn : v;
+        return 1;
+    return a >= lat->n[0] ? -1 : 0;
 }
 
 /* One best-first search from seeds. With goals, it ends when nothing left
@@ -417,6 +414,7 @@ static void search_from(struct qrt_planner *pl, const struct moves *mv,
 {
     const struct qrt_lattice *lat = &pl->mask.lat;
     long n_nodes = qrt_lattice_node_count(lat), size = 0, i;
+    const long turn = n_nodes; /* the index's step for a turn of alpha */
     double best = HUGE_VAL;
     int inside;
     /* the alpha nodes of the goals: a node on none is no goal */
@@ -494,7 +492,7 @@ static void search_from(struct qrt_planner *pl, const struct moves *mv,
             d = qrt_lowest_bit(todo);
             v = u + mv->delta[d];
             if (!inside)
-                v = across_seam(lat, ijk, mv->offset[d][0], v);
+                v += turn * seam_turns(lat, ijk[0] + mv->offset[d][0]);
             /* the tests by index first: most moves end at one of them */
             place = place_of(pl, v);
             if (place == -2)
@@ -505,8 +503,8 @@ static void search_from(struct qrt_planner *pl, const struct moves *mv,
             nb[0] = ijk[0] + mv->offset[d][0];
             nb[1] = ijk[1] + mv->offset[d][1];
             nb[2] = ijk[2] + mv->offset[d][2];
-            if (!inside && (nb[0] < 0 || nb[0] >= lat->n[0]))
-                nb[0] += nb[0] < 0 ? lat->n[0] : -lat->n[0];
+            if (!inside)
+                nb[0] += lat->n[0] * seam_turns(lat, nb[0]);
             /* a bit set is final even in a row not built yet; a node not
              * known yet is checked when taken */
             if (qrt_mask_bit(&pl->mask, nb))
