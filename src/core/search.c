@@ -423,8 +423,9 @@ static void search_from(struct qrt_planner *pl, const struct moves *mv,
     for (i = 0; i < (n_nodes + 63) / 64; i++)
         pl->search_seen[i] = 0;
     for (i = 0; goals && i < goals->count; i++) {
-        int a = (int)(goals->node[i] / ((long)lat->n[1] * lat->n[2]));
-        goal_alpha[a >> 6] |= 1ULL << (a & 63);
+        int c[3];
+        qrt_lattice_coords(lat, goals->node[i], c);
+        goal_alpha[c[0] >> 6] |= 1ULL << (c[0] & 63);
     }
     for (i = 0; i < seeds->count; i++) {
         long node = seeds->node[i];
