@@ -58,13 +58,16 @@ table() {
                 $cc ${flags:-} -x c -std=c99 -include qrtplan/planner.h -Iinclude \
                     -DQRT_GRID_DEG_MIN="$grid" -DQRT_MAX_POINTS="$pts" \
                     -c - -o "$dir/probe.o"
-            local state text data bss stack
+            local state text data bss stack report
             state=$((16#$($(tool_for "$name" nm) -S "$dir/probe.o" |
                 awk '/qrt_budget_state/ {print $2}')))
             read -r text data bss < <($(tool_for "$name" size) -t \
                 "$dir/lib/libqrtplan.a" | awk '/TOTALS/ {print $1, $2, $3}')
-            stack=$(python3 tools/stack_report.py "$dir/CMakeFiles/qrtplan.dir" |
-                awk '/^worst path:/ {print $3}')
+            # a report that fails (an unlisted indirect call, recursion)
+            # has no worst path to put in the table
+            report=$(python3 tools/stack_report.py "$dir/CMakeFiles/qrtplan.dir") ||
+                { grep '^FAIL' <<<"$report" >&2; exit 1; }
+            stack=$(awk '/^worst path:/ {print $3}' <<<"$report")
             local total=$((state + stack)) fits=""
             [ "$prof" = small ] &&
                 fits=" ($((total * 100 / sram)) % of 512 KiB)"
