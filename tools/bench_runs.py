@@ -22,6 +22,7 @@ About 3 minutes a run on the project's machines.
 """
 import argparse
 import csv
+import math
 import os
 import statistics
 import subprocess
@@ -133,17 +134,31 @@ def scene_exceptions(out, run_ids):
                 per.setdefault(r["scene"], {}).setdefault(regime, []).append(
                     (float(r["qrtplan_median_ms"]), float(r["rrtconnect_median_ms"])))
     return {s: v for s, v in per.items()
-            if any(c / q < LEVEL for runs in v.values() for q, c in runs)}
+            if any(not c / q >= LEVEL for runs in v.values() for q, c in runs)}
+
+
+def finite(values):
+    """A run where a planner found no path has NaN medians: left out of the
+    figures, and named in the table's line on lost runs instead."""
+    return [x for x in values if math.isfinite(x)]
 
 
 def span(values, fmt):
+    values = finite(values)
+    if not values:
+        return "–"
     lo, hi = min(values), max(values)
     return fmt.format(lo) if fmt.format(lo) == fmt.format(hi) else \
         fmt.format(lo) + "–" + fmt.format(hi)
 
 
+def median(values):
+    values = finite(values)
+    return statistics.median(values) if values else math.nan
+
+
 def ms(x):
-    return f"{x:.3g} ms"
+    return f"{x:.3g} ms" if math.isfinite(x) else "–"
 
 
 def bold(text, on=True):
@@ -177,13 +192,14 @@ def render(t5, fams, exceptions):
                 if g is None:
                     cells += ["–", "–", "–"]
                     continue
-                cells += [bold(ms(statistics.median(g["q"]))),
-                          ms(statistics.median(g["c"])),
-                          bold(span(g["lead"], "{:.1f}") + "×", min(g["lead"]) >= 10)]
+                leads = finite(g["lead"])
+                cells += [bold(ms(median(g["q"]))), ms(median(g["c"])),
+                          bold(span(leads, "{:.1f}") + "×" if leads else "–",
+                               bool(leads) and min(leads) >= 10)]
             turn = f.get("turn") or f.get("replan")
-            cells.append(span(turn["prm"], "{:.3g}") + " ms" if turn["prm"] else "–")
+            cells.append(span(turn["prm"], "{:.3g}") + " ms" if finite(turn["prm"]) else "–")
             cells.append(" / ".join(
-                f"{statistics.median(turn['len'][n]):.0f}°" if n in turn["len"] else "–"
+                f"{median(turn['len'][n]):.0f}°" if finite(turn["len"].get(n, [])) else "–"
                 for n in ("qrtplan", "RRTConnect", "RRTstar")))
             cells.append("all pass" if f["all_pass"] else "**not all pass**")
             lines.append("| " + " | ".join(cells) + " |")
@@ -195,8 +211,16 @@ def render(t5, fams, exceptions):
         lines += ["", f"Scenes where qrtplan was less than {LEVEL}× ahead in some run "
                   "(RRTConnect / qrtplan, lowest to highest run):"]
         for scene, v in exceptions.items():
-            parts = [f"{regime} " + span([c / q for q, c in v[regime]], "{:.2f}") + "×"
-                     for regime, _ in REGIMES if regime in v]
+            parts = []
+            for regime, _ in REGIMES:
+                if regime not in v:
+                    continue
+                leads = [c / q for q, c in v[regime]]
+                lost = len(leads) - len(finite(leads))
+                parts.append(f"{regime} " + (span(leads, "{:.2f}") + "×" if finite(leads)
+                                             else "–") +
+                             (f" (no path in {lost} run{'s' if lost > 1 else ''})"
+                              if lost else ""))
             lines.append(f"* `{scene}`: " + ", ".join(parts))
     return "\n".join(lines) + "\n"
 

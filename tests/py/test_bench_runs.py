@@ -2,6 +2,7 @@
 ranges, oracle verdict and scene list must be the runs' own, on made-up runs
 whose answers are known."""
 import csv
+import math
 import subprocess
 import sys
 
@@ -24,7 +25,7 @@ def write(path, header, rows):
         w.writerows(rows)
 
 
-def make_runs(tmp_path, oracle_fail_in=None):
+def make_runs(tmp_path, oracle_fail_in=None, qrtplan_lost_in=None):
     """Three runs a regime. qrtplan's box median is 2, 3 and 5 ms in turn
     against RRTConnect's 8, 9 and 16 (a mean would not be the median);
     box_1 is level in run 2 only."""
@@ -32,8 +33,12 @@ def make_runs(tmp_path, oracle_fail_in=None):
         for i, (q, c) in enumerate(((2.0, 8.0), (3.0, 9.0), (5.0, 16.0)), start=1):
             d = tmp_path / f"{regime}_{i}"
             oracle = 0.9 if (regime, i) == oracle_fail_in else 1.0
+            if (regime, i) == qrtplan_lost_in:  # what bench_compare writes then
+                q, ok, rate, length = math.nan, 0.0, math.nan, math.nan
+            else:
+                ok, rate, length = 1.0, 1.0, 333.0
             write(d / f"ompl_summary{suffix}.csv", SUMMARY, [
-                ["confined box", "qrtplan", 45, 1.0, q * scale, 333.0, 1.0],
+                ["confined box", "qrtplan", 45, ok, q * scale, length, rate],
                 ["confined box", "RRTConnect", 45, 1.0, c * scale, 500.0 + i, oracle],
                 ["confined box", "PRM", 45, 1.0, 100.0 * i, 400.0, 1.0],
                 ["confined box", "RRTstar", 3, 1.0 if i != 3 else 2 / 3, 1000.0, 340.0, 1.0],
@@ -114,3 +119,17 @@ def test_summarise_only_on_an_empty_directory_fails_clearly(tmp_path):
     r = subprocess.run([sys.executable, bench_runs.__file__, "--summarise-only",
                         "--out", str(tmp_path)], capture_output=True, text=True)
     assert r.returncode != 0 and "no runs found" in r.stderr
+
+
+def test_a_run_without_a_path_is_named_not_averaged(tmp_path):
+    make_runs(tmp_path, qrtplan_lost_in=("turn", 2))
+    fams = bench_runs.ompl_summary(tmp_path, ids(tmp_path))
+    box = fams["confined box"]
+    assert ("turn", 2, "qrtplan", 0.0) in box["lost"]
+    table = bench_runs.render([], fams, bench_runs.scene_exceptions(tmp_path, ids(tmp_path)))
+    row = next(line for line in table.splitlines() if line.startswith("| confined box"))
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    assert cells[1:4] == ["**3.5 ms**", "9 ms", "3.2–4.0×"]  # runs 1 and 3
+    assert cells[8] == "333° / 502° / 340°"
+    assert "qrtplan 0% in turn run 2" in table
+    assert "`box_4`: turn 3.20–4.00× (no path in 1 run), replan 3.00–4.00×" in table
