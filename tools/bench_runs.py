@@ -39,24 +39,31 @@ TABLE5_ROWS = [(1, 16, "1 × 16"), (1, 1444, "1 × 1,444 (Table 4 scene)"),
 LEVEL = 1.2  # a scene where qrtplan is less than this far ahead is listed
 
 
+def run_logged(name, args, log_path):
+    """Run args with its output in log_path; stop, naming the log, if it fails."""
+    with open(log_path, "w") as log:
+        try:
+            rc = subprocess.run(args, stdout=log, stderr=log).returncode
+        except OSError as e:
+            sys.exit(f"bench_runs: cannot run {name}: {e} (run `make` first)")
+    if rc != 0:
+        sys.exit(f"bench_runs: {name} failed (exit {rc}); its output: {log_path}")
+
+
 def run_all(out, runs, repeats, seeds):
-    py = sys.executable
     for i in range(1, runs + 1):
         print(f"run {i} of {runs}: Table 5", file=sys.stderr)
-        with open(os.path.join(out, f"table5_{i}.txt"), "w") as log:
-            subprocess.run([os.path.join(REPO, "build", "bin", "bench_table5"),
-                            "--repeats", str(repeats), "--csv",
-                            os.path.join(out, f"table5_{i}.csv")],
-                           check=True, stdout=log)
+        args = [os.path.join(REPO, "build", "bin", "bench_table5"), "--repeats",
+                str(repeats), "--csv", os.path.join(out, f"table5_{i}.csv")]
+        run_logged("bench_table5", args, os.path.join(out, f"table5_{i}.txt"))
         for regime, _ in REGIMES:
             print(f"run {i} of {runs}: OMPL, {regime}", file=sys.stderr)
-            args = [py, os.path.join(REPO, "tools", "bench_compare.py"),
+            args = [sys.executable, os.path.join(REPO, "tools", "bench_compare.py"),
                     "--repeats", str(repeats), "--seeds", str(seeds),
                     "--out", os.path.join(out, f"{regime}_{i}")]
             if regime == "replan":
                 args.append("--replanning")
-            with open(os.path.join(out, f"{regime}_{i}.log"), "w") as log:
-                subprocess.run(args, check=True, stdout=log, stderr=log)
+            run_logged("bench_compare.py", args, os.path.join(out, f"{regime}_{i}.log"))
 
 
 def read_csv(path):

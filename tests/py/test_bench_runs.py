@@ -6,6 +6,8 @@ import math
 import subprocess
 import sys
 
+import pytest
+
 import bench_runs
 
 SUMMARY = ["family", "planner", "runs", "success_rate", "median_ms",
@@ -133,3 +135,13 @@ def test_a_run_without_a_path_is_named_not_averaged(tmp_path):
     assert cells[8] == "333° / 502° / 340°"
     assert "qrtplan 0% in turn run 2" in table
     assert "`box_4`: turn 3.20–4.00× (no path in 1 run), replan 3.00–4.00×" in table
+
+
+def test_a_failing_benchmark_stops_the_runs_and_names_its_log(tmp_path):
+    log = tmp_path / "x.log"
+    with pytest.raises(SystemExit) as e:
+        bench_runs.run_logged("x", [sys.executable, "-c", "import sys; sys.exit(3)"], log)
+    assert str(e.value) == f"bench_runs: x failed (exit 3); its output: {log}"
+    with pytest.raises(SystemExit) as e:
+        bench_runs.run_logged("y", [str(tmp_path / "no-such-binary")], log)
+    assert "cannot run y" in str(e.value) and "run `make` first" in str(e.value)
