@@ -151,13 +151,13 @@ def finite(values):
     return [x for x in values if math.isfinite(x)]
 
 
-def span(values, fmt):
+def span(values, fmt, unit=""):
+    """Lowest to highest of the finite values, with unit; "–" if none is."""
     values = finite(values)
     if not values:
         return "–"
-    lo, hi = min(values), max(values)
-    return fmt.format(lo) if fmt.format(lo) == fmt.format(hi) else \
-        fmt.format(lo) + "–" + fmt.format(hi)
+    lo, hi = fmt.format(min(values)), fmt.format(max(values))
+    return (lo if lo == hi else lo + "–" + hi) + unit
 
 
 def median(values):
@@ -202,10 +202,9 @@ def render(t5, fams, exceptions):
                     continue
                 leads = finite(g["lead"])
                 cells += [bold(ms(median(g["q"]))), ms(median(g["c"])),
-                          bold(span(leads, "{:.1f}") + "×" if leads else "–",
-                               bool(leads) and min(leads) >= 10)]
+                          bold(span(leads, "{:.1f}", "×"), bool(leads) and min(leads) >= 10)]
             turn = f.get("turn") or f.get("replan")
-            cells.append(span(turn["prm"], "{:.3g}") + " ms" if finite(turn["prm"]) else "–")
+            cells.append(span(turn["prm"], "{:.3g}", " ms"))
             cells.append(" / ".join(
                 f"{median(turn['len'][n]):.0f}°" if finite(turn["len"].get(n, [])) else "–"
                 for n in ("qrtplan", "RRTConnect", "RRTstar")))
@@ -225,8 +224,7 @@ def render(t5, fams, exceptions):
                     continue
                 leads = [c / q for q, c in v[regime]]
                 lost = len(leads) - len(finite(leads))
-                parts.append(f"{regime} " + (span(leads, "{:.2f}") + "×" if finite(leads)
-                                             else "–") +
+                parts.append(f"{regime} " + span(leads, "{:.2f}", "×") +
                              (f" (no path in {lost} run{'s' if lost > 1 else ''})"
                               if lost else ""))
             lines.append(f"* `{scene}`: " + ", ".join(parts))
