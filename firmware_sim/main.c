@@ -47,8 +47,8 @@ static void usage(FILE *out)
         "  --start-deg A,S,E     the first three drives' positions at "
         "power-up,\n"
         "                        in degrees (default 0,0,0)\n"
-        "  --limit ID:MIN:MAX    position limits of node ID in counts "
-        "(0x607D)\n"
+        "  --limit ID:MIN:MAX    position limits of node ID (one of --nodes)\n"
+        "                        in counts, 32-bit signed (0x607D)\n"
         "  --servo-error COUNTS  steady-state error: every drive settles at\n"
         "                        target + COUNTS (0x2001, default 0)\n"
         "  --heartbeat-ms MS     heartbeat producer time (0x1017, default "
@@ -169,9 +169,13 @@ int main(int argc, char **argv)
                   !(fabs(start_deg[0]) <= 1e5 && fabs(start_deg[1]) <= 1e5 &&
                     fabs(start_deg[2]) <= 1e5);
         } else if (strcmp(o, "--limit") == 0) {
+            /* 0x607D's limits are INTEGER32: a wider value would wrap */
+            char extra;
             bad = n_lim == MAX_DRIVES ||
-                  sscanf(v, "%ld:%ld:%ld", &lim_id[n_lim], &lim_min[n_lim],
-                         &lim_max[n_lim]) != 3 ||
+                  sscanf(v, "%ld:%ld:%ld%c", &lim_id[n_lim], &lim_min[n_lim],
+                         &lim_max[n_lim], &extra) != 3 ||
+                  lim_id[n_lim] < 1 || lim_id[n_lim] > 127 ||
+                  lim_min[n_lim] < INT32_MIN || lim_max[n_lim] > INT32_MAX ||
                   lim_min[n_lim] > lim_max[n_lim];
             n_lim += !bad;
         } else if (strcmp(o, "--servo-error") == 0) {
@@ -204,6 +208,26 @@ int main(int argc, char **argv)
         }
     }
 
+    for (i = 0; i < n_lim; i++) {
+        unsigned j;
+        for (j = 0; j < n_nodes && nodes[j] != (unsigned long)lim_id[i]; j++)
+            ;
+        if (j == n_nodes) {
+            fprintf(stderr, "servo_sim: --limit for node %ld, not in --nodes\n",
+                    lim_id[i]);
+            return 2;
+        }
+    }
+    /* the power-up positions in counts must fit 0x6064's INTEGER32 */
+    for (i = 0; i < 3; i++) {
+        if (!(fabs(start_deg[i] * counts_per_deg) < 2.0e9)) {
+            fprintf(stderr,
+                    "servo_sim: --start-deg %g times --counts-per-deg %g is "
+                    "beyond a 32-bit position\n",
+                    start_deg[i], counts_per_deg);
+            return 2;
+        }
+    }
     if (socketcan_open(&sc, iface, &can) != 0) {
         return 1;
     }

@@ -1,5 +1,7 @@
 /* qrtplan: the planning core on scene files. */
 #define _XOPEN_SOURCE 700
+#include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -55,7 +57,10 @@ static const char help[] =
     "       k = round(sqrt(K)). Start (-100,0,0) and goal (100,0,0) unless\n"
     "       given. With --pcd the points go to a binary PCD file that the "
     "scene\n"
-    "       names in points_file (--pcd-ascii: ASCII PCD).\n";
+    "       names in points_file (--pcd-ascii: ASCII PCD). Values it refuses\n"
+    "       (exit 2): N outside 1..1000, K outside 4..1e8, R outside\n"
+    "       1e-6..1000 m, D or Z beyond 1000 m, DEG beyond 1e6, and any\n"
+    "       number that is not finite.\n";
 
 static int fail(const char *file, const char *msg)
 {
@@ -194,10 +199,44 @@ static int cmd_mask(int argc, char **argv)
     return close_output(out, out_path);
 }
 
+/* gen's numbers: the whole text a number, finite and within [lo, hi], so
+ * that no NaN, Inf or overflow reaches the scene it writes as JSON. */
+static int gen_number(const char *s, double lo, double hi, double *out)
+{
+    char *end = NULL;
+    double v;
+    errno = 0;
+    v = strtod(s, &end);
+    if (end == s || *end || errno || !(v >= lo && v <= hi))
+        return 0;
+    *out = v;
+    return 1;
+}
+
+static int gen_count(const char *s, long lo, long hi, int *out)
+{
+    char *end = NULL;
+    long v;
+    errno = 0;
+    v = strtol(s, &end, 10);
+    if (end == s || *end || errno || v < lo || v > hi)
+        return 0;
+    *out = (int)v;
+    return 1;
+}
+
+/* A,S,E in degrees; the planner checks the joint limits when it reads the
+ * scene, so here only that the three are finite numbers. */
 static int parse_triple(const char *s, double v[3])
 {
     char extra;
-    return sscanf(s, "%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &extra) == 3;
+    int k;
+    if (sscanf(s, "%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &extra) != 3)
+        return 0;
+    for (k = 0; k < 3; k++)
+        if (!(fabs(v[k]) <= 1e6))
+            return 0;
+    return 1;
 }
 
 static int write_pcd(const char *path, const double *xyz, long n, int ascii)
@@ -262,40 +301,40 @@ static int cmd_gen(int argc, char **argv)
     sphere_layout_default(&L);
     for (i = 0; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        char *end = NULL;
+        const char *need = "";
+        int ok = 1;
         if (!v)
             return fail(NULL, "gen: option without a value (see --help)");
         i++;
         if (strcmp(a, "--spheres") == 0)
-            L.spheres = (int)strtol(v, &end, 10);
+            ok = gen_count(v, 1, 1000, &L.spheres), need = "1..1000";
         else if (strcmp(a, "--points") == 0)
-            L.points = (int)strtol(v, &end, 10);
+            ok = gen_count(v, 4, 100000000, &L.points), need = "4..1e8";
         else if (strcmp(a, "--radius") == 0)
-            L.radius_m = strtod(v, &end);
+            ok = gen_number(v, 1e-6, 1e3, &L.radius_m), need = "1e-6..1000 m";
         else if (strcmp(a, "--distance") == 0)
-            L.distance_m = strtod(v, &end);
+            ok = gen_number(v, -1e3, 1e3, &L.distance_m),
+            need = "-1000..1000 m";
         else if (strcmp(a, "--height") == 0)
-            L.height_m = strtod(v, &end);
+            ok = gen_number(v, -1e3, 1e3, &L.height_m), need = "-1000..1000 m";
         else if (strcmp(a, "--phase") == 0)
-            L.phase_deg = strtod(v, &end);
-        else if (strcmp(a, "--start") == 0 && parse_triple(v, start))
-            continue;
-        else if (strcmp(a, "--goal") == 0 && parse_triple(v, goal))
-            continue;
+            ok = gen_number(v, -1e6, 1e6, &L.phase_deg), need = "-1e6..1e6 deg";
+        else if (strcmp(a, "--start") == 0 || strcmp(a, "--goal") == 0)
+            ok = parse_triple(v, a[2] == 's' ? start : goal),
+            need = "three finite degrees A,S,E";
         else if (strcmp(a, "-o") == 0)
             out_path = v;
         else if (strcmp(a, "--pcd") == 0 || strcmp(a, "--pcd-ascii") == 0) {
             pcd_path = v;
             pcd_ascii = a[5] == '-';
         } else
-            return fail(NULL, "gen: bad option or value (see --help)");
-        if (end && *end)
-            return fail(NULL, "gen: bad number (see --help)");
+            return fail(NULL, "gen: unknown option (see --help)");
+        if (!ok) {
+            fprintf(stderr, "qrtplan: gen: bad value '%s' for %s (need %s)\n",
+                    v, a, need);
+            return 2;
+        }
     }
-    if (L.spheres < 1 || L.spheres > 1000 || L.points < 4 ||
-        L.points > 100000000 || L.radius_m <= 0.0)
-        return fail(NULL,
-                    "gen: need 1..1000 spheres, 4..1e8 points, radius > 0");
     n = sphere_layout_count(&L);
     xyz = malloc((size_t)n * 3 * sizeof *xyz);
     if (!xyz)

@@ -2,6 +2,8 @@
 written scene can find wherever the two files are put."""
 import json
 
+import pytest
+
 from conftest import run_cli
 
 
@@ -32,3 +34,36 @@ def test_pcd_beside_the_scene_is_named_relatively(qrtplan, tmp_path):
     r = run_cli(["gen", "--points", "64", "--pcd", pcd, "-o", scene])
     assert r.returncode == 0, r.stderr
     assert json.loads(scene.read_text())["points_file"] == "c.pcd"
+
+
+@pytest.mark.parametrize("option,value", [
+    ("--radius", "nan"), ("--radius", "0"), ("--radius", "1e400"),
+    ("--distance", "inf"), ("--height", "-nan"), ("--height", ""),
+    ("--phase", "inf"), ("--start", "nan,0,0"), ("--goal", "1,2,inf"),
+    ("--goal", "1,2"), ("--spheres", "4294967297"), ("--spheres", "2x"),
+    ("--points", "3"),
+])
+def test_values_that_would_write_garbage_are_refused(qrtplan, tmp_path,
+                                                     option, value):
+    """A NaN or Inf in a layout value used to come out as `nan` in the
+    scene's JSON (not JSON at all), and an out-of-range count wrapped."""
+    out = tmp_path / "s.json"
+    r = run_cli(["gen", option, value, "-o", out])
+    assert r.returncode == 2
+    assert f"bad value '{value}' for {option}" in r.stderr
+    assert r.stderr.count("\n") == 1
+    assert not out.exists()
+
+
+def test_every_accepted_layout_writes_json_the_planner_reads(qrtplan,
+                                                              tmp_path):
+    out = tmp_path / "s.json"
+    r = run_cli(["gen", "--spheres", "2", "--points", "16", "--radius", "1000",
+                 "--distance", "-1000", "--height", "1e3", "--phase", "-1e6",
+                 "--start", "10,0,0", "--goal", "-10,5,5", "-o", out])
+    assert r.returncode == 0, r.stderr
+    scene = json.loads(out.read_text())
+    assert len(scene["points"]) == 32
+    assert scene["goal"]["joints_deg"] == [-10, 5, 5]
+    r = run_cli(["plan", out])
+    assert r.returncode == 0, r.stderr
