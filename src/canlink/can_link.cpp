@@ -2,6 +2,7 @@
 #include "can_link.hpp"
 
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 
@@ -16,6 +17,23 @@
 
 namespace qrt
 {
+
+bool parse_node_ids(const std::string &text, unsigned ids[3])
+{
+    const char *p = text.c_str();
+    for (int j = 0; j < 3; j++) {
+        if (*p < '0' || *p > '9') // no sign, no space: strtoul takes both
+            return false;
+        char *end = nullptr;
+        errno = 0;
+        unsigned long v = std::strtoul(p, &end, 10);
+        if (errno || v < 1 || v > 127 || *end != (j < 2 ? ',' : '\0'))
+            return false;
+        ids[j] = unsigned(v);
+        p = end + 1;
+    }
+    return ids[0] != ids[1] && ids[1] != ids[2] && ids[0] != ids[2];
+}
 
 namespace
 {

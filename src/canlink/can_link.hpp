@@ -37,6 +37,12 @@ struct CanLinkStatus {
     uint64_t last_quick_stop_us = 0; // CLOCK_MONOTONIC when written
 };
 
+// "A,B,C": the drive node ids of alpha, sigma and eta, as the daemon's
+// --can-nodes and qrtplan-exec's --nodes take them: three distinct ids in
+// 1..127 (CANopen's range) and nothing else. False for anything more, less
+// or wider, so that no id wraps into the range.
+bool parse_node_ids(const std::string &text, unsigned ids[3]);
+
 class CanLink
 {
   public:

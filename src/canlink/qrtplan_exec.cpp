@@ -140,10 +140,9 @@ int main(int argc, char **argv)
             iface = value("--can");
         } else if (a == "--nodes") {
             unsigned n[3];
-            char extra;
-            if (std::sscanf(value("--nodes"), "%u,%u,%u%c", &n[0], &n[1], &n[2],
-                            &extra) != 3)
-                return fail_input("--nodes wants three ids, e.g. 1,2,3");
+            if (!qrt::parse_node_ids(value("--nodes"), n))
+                return fail_input(
+                    "--nodes wants three distinct ids in 1..127, e.g. 1,2,3");
             for (int j = 0; j < 3; j++)
                 cfg.node[j] = n[j];
         } else if (a == "--counts-per-deg") {

@@ -1,5 +1,7 @@
 #include "options.hpp"
 
+#include "can_link.hpp"
+
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -131,10 +133,8 @@ bool apply(Options *o, const std::string &key, const std::string &value,
         o->can_iface = value;
     } else if (key == "can-nodes") {
         unsigned n[3];
-        char extra;
-        if (std::sscanf(value.c_str(), "%u,%u,%u%c", &n[0], &n[1], &n[2],
-                        &extra) != 3)
-            return bad("three node ids, e.g. 1,2,3");
+        if (!qrt::parse_node_ids(value, n))
+            return bad("three distinct node ids in 1..127, e.g. 1,2,3");
         for (int j = 0; j < 3; j++)
             o->can.node[j] = n[j];
     } else if (key == "counts-per-deg") {

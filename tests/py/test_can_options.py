@@ -1,6 +1,7 @@
-"""servo_sim's command line: values that would wrap a 32-bit CiA 402 object
-or name a drive that is not simulated are refused before the bus is opened
-(so these run on a machine without SocketCAN)."""
+"""The CAN programs' command lines: values that would wrap a 32-bit CiA 402
+object, a node id outside CANopen's 1..127, or a drive that is not simulated
+are refused with one line, before any bus is opened (so these run on a
+machine without SocketCAN)."""
 import subprocess
 
 import pytest
@@ -8,6 +9,8 @@ import pytest
 from conftest import BIN
 
 SIM = BIN.parent / "servo_sim"  # built beside qrtplan
+EXEC = BIN.parent / "qrtplan-exec"
+DAEMON = BIN.parent / "qrtpland"
 
 
 def run_sim(args):
@@ -44,3 +47,30 @@ def test_accepted_values_reach_the_bus():
                  "--start-deg", "10,20,30", "--counts-per-deg", "1000"])
     assert r.returncode == 1, r.stderr
     assert "qrt_no_such_bus" in r.stderr or "socket" in r.stderr
+
+
+BAD_IDS = ["0,2,3", "1,128,3", "-1,2,3", "1,1,3", "4294967297,2,3",
+           " 1,2,3", "+1,2,3", "1,2,3x", "1,2", "1,2,3,4", ""]
+
+
+@pytest.mark.parametrize("ids", BAD_IDS)
+def test_node_ids_refused_by_the_daemon_and_exec(tmp_path, ids):
+    """4294967297 used to wrap to node 1 in the daemon (sscanf's %u)."""
+    for prog in (EXEC, DAEMON):
+        if not prog.is_file():
+            pytest.fail(f"{prog} not found: run `make` first")
+    plan = tmp_path / "p.json"
+    plan.write_text('{"status": "ok", "waypoints_deg": [[0, 0, 0], [5, 0, 0]]}')
+    r = subprocess.run([str(EXEC), "--nodes", ids, "--can", "qrt_no_such_bus",
+                        str(plan)], capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2 and "--nodes wants three distinct ids" in r.stderr
+    r = subprocess.run([str(DAEMON), "--can-nodes", ids, "--help"],
+                       capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2
+    assert "can-nodes: three distinct node ids in 1..127" in r.stderr
+
+
+def test_good_node_ids_accepted():
+    r = subprocess.run([str(DAEMON), "--can-nodes", "4,5,127", "--help"],
+                       capture_output=True, text=True, timeout=30)
+    assert r.returncode == 0, r.stderr
