@@ -152,12 +152,16 @@ int main(int argc, char **argv)
             snprintf(buf, sizeof buf, "%s", v);
             for (tok = strtok_r(buf, ",", &save); tok && !bad;
                  tok = strtok_r(0, ",", &save)) {
+                unsigned j;
                 bad = n_nodes == MAX_DRIVES || parse_long(tok, 1, 127, &x);
+                for (j = 0; j < n_nodes && !bad; j++) {
+                    bad = nodes[j] == (unsigned)x; /* one drive an id */
+                }
                 if (!bad) {
                     nodes[n_nodes++] = (unsigned)x;
                 }
             }
-            bad = bad || n_nodes == 0;
+            bad = bad || n_nodes == 0 || strlen(v) >= sizeof buf;
         } else if (strcmp(o, "--counts-per-deg") == 0) {
             char *end;
             counts_per_deg = strtod(v, &end);

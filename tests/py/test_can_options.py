@@ -22,6 +22,9 @@ def run_sim(args):
 
 
 @pytest.mark.parametrize("args,words", [
+    (["--nodes", "1,1,3"], "bad value for --nodes"),
+    (["--nodes", "1,2,3,4,5,6,7,8,9"], "bad value for --nodes"),
+    (["--nodes", "1,2,128"], "bad value for --nodes"),
     (["--limit", "2:1:5junk"], "bad value for --limit"),
     (["--limit", "200:1:5"], "bad value for --limit"),
     (["--limit", "2:-99999999999:5"], "bad value for --limit"),
