@@ -8,6 +8,9 @@ step taken in (-180, 180]). A configuration collides when any point is
 closer than link_radius + margin to a link (strict <).
 
     python tools/oracle.py SCENE.json PLAN.json   # exit 0 safe, 1 not
+
+Exit 2, with one line on stderr, when a file cannot be read or is not the
+scene or plan it should be: nothing was checked, so nothing is called safe.
 """
 import json
 import math
@@ -188,6 +191,12 @@ def check_path(scene, plan, points):
     if plan.get("status") != "ok" or not wps or len(wps) < 2:
         res.problems.append("not an ok plan with at least 2 waypoints")
         return res
+    for i, w in enumerate(wps):
+        if (not isinstance(w, list) or len(w) != 3 or
+                not all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                        and math.isfinite(x) for x in w)):
+            res.problems.append(f"waypoint {i} is not three finite numbers: {w!r}")
+            return res
     q = sample_path(arm, wps)
     res.samples = len(q)
     for j, (lo, hi) in enumerate(arm.limits):
@@ -220,18 +229,38 @@ def check_path(scene, plan, points):
     return res
 
 
+def read_json_object(path):
+    """The JSON object in path; ValueError (why) for anything else."""
+    try:
+        with open(path) as f:
+            doc = json.load(f)
+    except OSError as e:
+        raise ValueError(f"{path}: cannot read: {e.strerror}") from None
+    except ValueError as e:  # JSONDecodeError, bad UTF-8
+        raise ValueError(f"{path}: not JSON: {e}") from None
+    if not isinstance(doc, dict):
+        raise ValueError(f"{path}: not a JSON object")
+    return doc
+
+
 def main(argv):
     if len(argv) != 3:
-        print(__doc__.strip().splitlines()[-1].strip(), file=sys.stderr)
+        print("usage: python tools/oracle.py SCENE.json PLAN.json   "
+              "# exit 0 safe, 1 not, 2 cannot check", file=sys.stderr)
         return 2
-    with open(argv[1]) as f:
-        scene = json.load(f)
-    with open(argv[2]) as f:
-        plan = json.load(f)
-    if plan.get("status") != "ok":
-        print(f"plan status {plan.get('status')}: nothing to check")
-        return 0
-    res = check_path(scene, plan, scene_points(scene, os.path.dirname(argv[1])))
+    try:
+        scene = read_json_object(argv[1])
+        plan = read_json_object(argv[2])
+        if plan.get("status") != "ok":
+            print(f"plan status {plan.get('status')}: nothing to check")
+            return 0
+        points = scene_points(scene, os.path.dirname(argv[1]))
+        res = check_path(scene, plan, points)
+    except (ValueError, KeyError, TypeError, IndexError) as e:
+        # a scene the planner would refuse: nothing checked, nothing safe
+        why = e if isinstance(e, ValueError) else f"{type(e).__name__} {e}"
+        print(f"oracle: cannot check: {why}", file=sys.stderr)
+        return 2
     print(res)
     return 0 if res.safe else 1
 

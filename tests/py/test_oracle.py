@@ -1,4 +1,8 @@
 """The oracle must be able to say no: these paths are wrong on purpose."""
+import json
+import subprocess
+import sys
+
 import numpy as np
 
 import oracle
@@ -63,3 +67,42 @@ def test_wrong_cost_and_wrong_end_are_reported():
     p = plan([[0, 0, 0], [90, 0, 0]])
     p["cost_deg"] += 1.0
     assert not oracle.check_path(s, p, np.zeros((0, 3))).safe
+
+
+def test_waypoint_that_is_not_three_finite_numbers_is_not_safe():
+    s = scene([[0.0, -0.5, 0.5]])
+    for bad in ([float("nan"), 0, 0], [0, float("inf"), 0], ["x", 0, 0],
+                [0, 0], [True, 0, 0], None):
+        p = {"status": "ok", "waypoints_deg": [[0, 0, 0], bad, [90, 0, 0]],
+             "cost_deg": 90.0}
+        r = oracle.check_path(s, p, np.array(s["points"]))
+        assert not r.safe and "waypoint 1 is not three finite numbers" in str(r)
+
+
+def test_command_line_says_it_cannot_check_with_exit_2(tmp_path):
+    """Unreadable or malformed files: one line, exit 2, never 0 (safe) and
+    never a traceback."""
+    good_scene = tmp_path / "s.json"
+    good_scene.write_text(json.dumps(scene([[0.0, -0.5, 0.5]])))
+    good_plan = tmp_path / "p.json"
+    good_plan.write_text(json.dumps(plan([[0, 0, 0], [90, 0, 0]])))
+    broken = tmp_path / "broken.json"
+    broken.write_text("{")
+    array = tmp_path / "array.json"
+    array.write_text("[1, 2]")
+    no_start = tmp_path / "no_start.json"
+    no_start.write_text(json.dumps({"points": [[0.0, -0.5, 0.5]]}))
+
+    def run(*args):
+        return subprocess.run([sys.executable, oracle.__file__, *map(str, args)],
+                              capture_output=True, text=True, timeout=60)
+
+    r = run(good_scene, good_plan)
+    assert r.returncode == 0 and r.stdout.startswith("safe"), r.stderr
+    for args in ((good_scene, broken), (broken, good_plan),
+                 (good_scene, tmp_path / "missing.json"), (good_scene, array),
+                 (no_start, good_plan), (good_scene,)):
+        r = run(*args)
+        assert r.returncode == 2, (args, r.stdout, r.stderr)
+        assert "Traceback" not in r.stderr
+        assert len(r.stderr.strip().splitlines()) == 1, r.stderr
