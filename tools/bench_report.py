@@ -15,8 +15,17 @@ import numpy as np  # noqa: E402
 
 
 def main(argv):
-    rows = list(csv.DictReader(open(argv[1])))
+    if len(argv) != 3 or argv[1].startswith("-"):
+        print(__doc__.strip().splitlines()[-1].strip(), file=sys.stderr)
+        return 2
+    try:
+        with open(argv[1]) as f:
+            rows = list(csv.DictReader(f))
+    except OSError as e:
+        print(f"bench_report: {argv[1]}: {e.strerror}", file=sys.stderr)
+        return 2
     out = Path(argv[2])
+    out.mkdir(parents=True, exist_ok=True)
     table = [r for r in rows if r["paper_s"]]
     spheres = sorted({int(r["spheres"]) for r in table})
     points = sorted({int(r["points_per_sphere"]) for r in table})
