@@ -209,6 +209,10 @@ bool read_config(const std::string &path, Options *o, std::string *error)
             return false;
         }
     }
+    if (in.bad()) { // a read error, or a directory (opens, cannot be read)
+        *error = path + ": cannot read: " + std::strerror(errno);
+        return false;
+    }
     return true;
 }
 

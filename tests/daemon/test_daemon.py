@@ -317,6 +317,13 @@ def test_config_file_and_flags(daemon, tmp_path):
     from conftest import DAEMON
     r = subprocess.run([DAEMON, "--config", str(bad)], capture_output=True, text=True)
     assert r.returncode == 2 and "bad.conf:1" in r.stderr, r.stderr
+    # a directory opens but cannot be read: it used to count as an empty file
+    r = subprocess.run([DAEMON, "--config", str(tmp_path), "--help"],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and "cannot read" in r.stderr, r.stderr
+    r = subprocess.run([DAEMON, "--config", str(tmp_path / "missing.conf")],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and "cannot open" in r.stderr, r.stderr
 
 
 def test_replayed_log(daemon):
