@@ -75,6 +75,9 @@ std::string read_plan(const std::string &path,
     std::ifstream in(path, std::ios::binary);
     if (!in)
         return path + ": cannot open: " + std::strerror(errno);
+    in.peek(); // a directory opens, then cannot be read
+    if (in.bad())
+        return path + ": cannot read: " + std::strerror(errno);
     std::stringstream ss;
     ss << in.rdbuf();
     std::string text = ss.str();

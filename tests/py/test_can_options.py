@@ -77,3 +77,25 @@ def test_good_node_ids_accepted():
     r = subprocess.run([str(DAEMON), "--can-nodes", "4,5,127", "--help"],
                        capture_output=True, text=True, timeout=30)
     assert r.returncode == 0, r.stderr
+
+
+@pytest.mark.parametrize("text,words", [
+    (None, "cannot read: Is a directory"),
+    ("", "unexpected end of input"),
+    ("[1, 2]", 'no "status" string'),
+    ('{"status": "no_path", "waypoints_deg": [[0, 0, 0]]}', "nothing to execute"),
+    ('{"status": "ok", "waypoints_deg": []}', "must be an array of 1..256"),
+    ('{"status": "ok", "waypoints_deg": [[0, 0]]}', "is not [a, s, e]"),
+    ('{"status": "ok", "waypoints_deg": [[0, "x", 0]]}', "has a non-number"),
+])
+def test_exec_refuses_a_plan_it_cannot_use_before_the_bus(tmp_path, text,
+                                                          words):
+    plan = tmp_path / "p.json"
+    if text is None:
+        plan.mkdir()  # opens, then cannot be read
+    else:
+        plan.write_text(text)
+    r = subprocess.run([str(EXEC), "--can", "qrt_no_such_bus", str(plan)],
+                       capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2, r.stderr
+    assert words in r.stderr and "SocketCAN" not in r.stderr
