@@ -14,6 +14,7 @@ scene or plan it should be: nothing was checked, so nothing is called safe.
 """
 import json
 import math
+import numbers
 import os
 import sys
 
@@ -192,8 +193,8 @@ def check_path(scene, plan, points):
         res.problems.append("not an ok plan with at least 2 waypoints")
         return res
     for i, w in enumerate(wps):
-        if (not isinstance(w, list) or len(w) != 3 or
-                not all(isinstance(x, (int, float)) and not isinstance(x, bool)
+        if (not isinstance(w, (list, tuple)) or len(w) != 3 or
+                not all(isinstance(x, numbers.Real) and not isinstance(x, bool)
                         and math.isfinite(x) for x in w)):
             res.problems.append(f"waypoint {i} is not three finite numbers: {w!r}")
             return res
