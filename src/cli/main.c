@@ -59,8 +59,8 @@ static const char help[] =
     "scene\n"
     "       names in points_file (--pcd-ascii: ASCII PCD). Values it refuses\n"
     "       (exit 2): N outside 1..1000, K outside 4..1e8, R outside\n"
-    "       1e-6..1000 m, D or Z beyond 1000 m, DEG beyond 1e6, and any\n"
-    "       number that is not finite.\n";
+    "       1e-6..1000 m, D or Z beyond 1000 m, DEG beyond 1e6, more than\n"
+    "       1e8 points in all, and any number that is not finite.\n";
 
 static int fail(const char *file, const char *msg)
 {
@@ -335,6 +335,8 @@ static int cmd_gen(int argc, char **argv)
             return 2;
         }
     }
+    if ((double)L.spheres * sphere_side(&L) * sphere_side(&L) > 1e8)
+        return fail(NULL, "gen: N x K beyond 1e8 points in all");
     n = sphere_layout_count(&L);
     xyz = malloc((size_t)n * 3 * sizeof *xyz);
     if (!xyz)

@@ -55,6 +55,15 @@ def test_values_that_would_write_garbage_are_refused(qrtplan, tmp_path,
     assert not out.exists()
 
 
+def test_more_than_1e8_points_in_all_is_refused(qrtplan, tmp_path):
+    """Each count is in range, their product is not (it would overflow a
+    32-bit long on the ARM builds)."""
+    out = tmp_path / "s.json"
+    r = run_cli(["gen", "--spheres", "1000", "--points", "100000000", "-o", out])
+    assert r.returncode == 2 and "beyond 1e8 points in all" in r.stderr
+    assert not out.exists()
+
+
 def test_every_accepted_layout_writes_json_the_planner_reads(qrtplan,
                                                               tmp_path):
     out = tmp_path / "s.json"
