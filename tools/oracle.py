@@ -198,6 +198,16 @@ def check_path(scene, plan, points):
                         and math.isfinite(x) for x in w)):
             res.problems.append(f"waypoint {i} is not three finite numbers: {w!r}")
             return res
+    # a NaN distance compares false with everything: it would pass
+    pts = np.asarray(points, float).reshape(-1, 3)
+    if not np.isfinite(pts).all():
+        res.problems.append("the scene has points that are not finite")
+        return res
+    arm_numbers = [*arm.links, *arm.radii, arm.margin, *np.ravel(arm.limits)]
+    if not np.isfinite(np.asarray(arm_numbers, float)).all():
+        res.problems.append("the arm's lengths, radii, margin or limits are "
+                            "not finite")
+        return res
     q = sample_path(arm, wps)
     res.samples = len(q)
     for j, (lo, hi) in enumerate(arm.limits):

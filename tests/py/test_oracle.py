@@ -79,6 +79,27 @@ def test_waypoint_that_is_not_three_finite_numbers_is_not_safe():
         assert not r.safe and "waypoint 1 is not three finite numbers" in str(r)
 
 
+def test_a_point_that_is_not_finite_is_not_safe():
+    """Its distances are NaN, and NaN < 0 is false: it must not pass."""
+    s = scene([[0.0, -0.5, 0.5]])
+    for bad in (float("nan"), float("inf")):
+        pts = np.array([[0.0, -0.5, 0.5], [0.5, 0.0, bad]])
+        r = oracle.check_path(s, plan([[0, 0, 0], [90, 0, 0]]), pts)
+        assert not r.safe and "not finite" in str(r)
+
+
+def test_an_arm_that_is_not_finite_is_not_safe():
+    for arm in ({"link_radius_m": [0.02, float("nan"), 0.02]},
+                {"links_m": [0.09, float("inf"), 0.5]}):
+        s = dict(scene([[0.0, -0.5, 0.5]]), arm=arm)
+        r = oracle.check_path(s, plan([[0, 0, 0], [90, 0, 0]]),
+                              np.array(s["points"]))
+        assert not r.safe and "not finite" in str(r)
+    s = dict(scene([[0.0, -0.5, 0.5]]), margin_m=float("nan"))
+    r = oracle.check_path(s, plan([[0, 0, 0], [90, 0, 0]]), np.array(s["points"]))
+    assert not r.safe and "not finite" in str(r)
+
+
 def test_command_line_says_it_cannot_check_with_exit_2(tmp_path):
     """Unreadable or malformed files: one line, exit 2, never 0 (safe) and
     never a traceback."""
