@@ -219,7 +219,7 @@ def check_path(scene, plan, points):
                                 f"{bad[0]}: {q[bad[0]].tolist()}")
     c = clearances(arm, q, points)
     res.min_clearance = float(c.min()) if len(c) else math.inf
-    hit = np.nonzero(c < 0.0)[0]
+    hit = np.nonzero(~(c >= 0.0))[0]  # a NaN clearance is a hit
     if len(hit):
         res.problems.append(f"collision at sample {hit[0]} {q[hit[0]].tolist()}: "
                             f"clearance {c[hit[0]]:.5f} m")
@@ -228,14 +228,15 @@ def check_path(scene, plan, points):
         if "joints_deg" in target:
             d = np.asarray(q_end, float) - np.asarray(target["joints_deg"], float)
             d[0] = wrap180(d[0])
-            if np.max(np.abs(d)) > 1e-6:
+            if not np.max(np.abs(d)) <= 1e-6:  # NaN fails too
                 res.problems.append(f"path {name} {q_end} is not {target}")
         else:
             tip = arm.joints(q_end)[0, 3]
-            if np.linalg.norm(tip - np.asarray(target["xyz_m"], float)) > 1e-6:
+            if not np.linalg.norm(tip - np.asarray(target["xyz_m"], float)) <= 1e-6:
                 res.problems.append(f"path {name} tip {tip.tolist()} misses {target}")
     cost = path_length(arm, wps)
-    if abs(cost - plan.get("cost_deg", -1.0)) > 1e-4:
+    cost_deg = plan.get("cost_deg", -1.0)
+    if not (isinstance(cost_deg, numbers.Real) and abs(cost - cost_deg) <= 1e-4):
         res.problems.append(f"cost_deg {plan.get('cost_deg')} but path length {cost}")
     return res
 

@@ -100,6 +100,22 @@ def test_an_arm_that_is_not_finite_is_not_safe():
     assert not r.safe and "not finite" in str(r)
 
 
+def test_nan_in_the_cost_or_the_target_is_not_passed():
+    """Each check is written so that NaN fails it (not x <= tol), since
+    NaN > tol is false too."""
+    s = scene([[0.0, -0.5, 0.5]])
+    p = plan([[0, 0, 0], [90, 0, 0]])
+    p["cost_deg"] = float("nan")
+    r = oracle.check_path(s, p, np.array(s["points"]))
+    assert not r.safe and "cost_deg" in str(r)
+    s = scene([[0.0, -0.5, 0.5]], goal=(90, float("nan"), 0))
+    r = oracle.check_path(s, plan([[0, 0, 0], [90, 0, 0]]), np.array(s["points"]))
+    assert not r.safe and "path goal" in str(r)
+    s = {**scene([[0.0, -0.5, 0.5]]), "goal": {"xyz_m": [float("nan"), 0, 0]}}
+    r = oracle.check_path(s, plan([[0, 0, 0], [90, 0, 0]]), np.array(s["points"]))
+    assert not r.safe and "misses" in str(r)
+
+
 def test_command_line_says_it_cannot_check_with_exit_2(tmp_path):
     """Unreadable or malformed files: one line, exit 2, never 0 (safe) and
     never a traceback."""
