@@ -2,6 +2,7 @@
 
 #include "can_link.hpp"
 
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -32,6 +33,7 @@ const char *kUsage =
     "                           read from the drives' publisher "
     "(QRT_JOINT_STATE)\n"
     "  --status-channel NAME    1 Hz daemon status (QRT_STATUS)\n"
+    "                           (channel names: 1..63 of A-Z a-z 0-9 _ - / :)\n"
     "  --window SECONDS         obstacle picture = every scan of the last\n"
     "                           SECONDS per sensor (0: the latest scan only)\n"
     "  --mask as-read|whole     find only the mask nodes the plan reads,\n"
@@ -70,6 +72,17 @@ bool to_double(const std::string &s, double *out)
     return true;
 }
 
+bool channel_name_ok(const std::string &s)
+{
+    if (s.empty() || s.size() > 63) // LCM's longest channel name
+        return false;
+    for (char c : s)
+        if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' &&
+            c != '-' && c != '/' && c != ':')
+            return false;
+    return true;
+}
+
 // One setting; false with *error set if the key or value is bad.
 bool apply(Options *o, const std::string &key, const std::string &value,
            std::string *error)
@@ -82,18 +95,20 @@ bool apply(Options *o, const std::string &key, const std::string &value,
     auto number = [&](double lo, double hi) {
         return to_double(value, &v) && v >= lo && v <= hi;
     };
-    if (key == "lcm-url")
+    std::string *channel = key == "scan-channel"      ? &o->scan_channel
+                           : key == "request-channel" ? &o->request_channel
+                           : key == "plan-channel"    ? &o->plan_channel
+                           : key == "joint-channel"   ? &o->joint_channel
+                           : key == "status-channel"  ? &o->status_channel
+                                                      : nullptr;
+    if (channel) {
+        // LCM subscribes by regular expression: a '.' or '*' in a name
+        // would take other channels' messages too
+        if (!channel_name_ok(value))
+            return bad("1..63 of A-Z a-z 0-9 _ - / :");
+        *channel = value;
+    } else if (key == "lcm-url")
         o->lcm_url = value;
-    else if (key == "scan-channel")
-        o->scan_channel = value;
-    else if (key == "request-channel")
-        o->request_channel = value;
-    else if (key == "plan-channel")
-        o->plan_channel = value;
-    else if (key == "joint-channel")
-        o->joint_channel = value;
-    else if (key == "status-channel")
-        o->status_channel = value;
     else if (key == "window") {
         if (!number(0, 3600))
             return bad("seconds in 0..3600");
@@ -107,7 +122,7 @@ bool apply(Options *o, const std::string &key, const std::string &value,
             return bad("1 or 2");
         o->mask_threads = value == "1" ? 1 : 2;
     } else if (key == "max-returns") {
-        if (!number(1, 50000000))
+        if (!number(1, 50000000) || v != std::floor(v))
             return bad("a count in 1..50000000");
         o->max_returns = long(v);
     } else if (key == "margin") {

@@ -294,6 +294,18 @@ def test_help_and_bad_flags():
     assert r.returncode == 2 and "grid" in r.stderr
     r = subprocess.run([DAEMON, "--bogus", "1"], capture_output=True, text=True)
     assert r.returncode == 2 and "unknown setting" in r.stderr
+    # LCM subscribes by regular expression: QRT.SCAN would also take QRTXSCAN
+    for key, value in (("--scan-channel", "QRT.SCAN"), ("--plan-channel", ""),
+                       ("--request-channel", "A B"),
+                       ("--status-channel", "S" * 64),
+                       ("--joint-channel", "J*"), ("--max-returns", "1.5")):
+        r = subprocess.run([DAEMON, key, value, "--help"], capture_output=True,
+                           text=True)
+        assert r.returncode == 2 and key[2:] + ":" in r.stderr, (key, r.stderr)
+    r = subprocess.run([DAEMON, "--status-channel", "MY_STATUS-2/x:y",
+                        "--max-returns", "7", "--help"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
 
 
 def test_config_file_and_flags(daemon, tmp_path):
