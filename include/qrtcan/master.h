@@ -40,6 +40,9 @@ struct qrtcan_master_config {
     struct qrtcan_scale scale[QRTCAN_JOINTS];
     double max_speed_deg_s[QRTCAN_JOINTS];  /* per joint (default 30) */
     double max_accel_deg_s2[QRTCAN_JOINTS]; /* per joint (default 60) */
+    /* [joint][lo, hi] in degrees: no path leaves them (default design.md
+     * section 3's). Alpha wraps, and is not limited, iff [-180, 180]. */
+    double limit_deg[QRTCAN_JOINTS][2];
     uint32_t sync_period_us;       /* SYNC + RPDO cycle (default 10 ms) */
     uint32_t master_heartbeat_us;  /* our heartbeat period (100 ms) */
     uint16_t drive_heartbeat_ms;   /* asked of each drive (0x1017) (50) */
@@ -157,13 +160,22 @@ void qrtcan_master_shutdown(struct qrtcan_master *m, uint64_t now_us);
 
 /* A path to execute from where the arm stands. waypoints[0] must be the
  * arm's present position (within 1 degree per joint, else QRTCAN_E_RANGE:
- * the master never makes a move nobody planned). Accepted only with the
+ * the master never makes a move nobody planned), and every waypoint within
+ * the joint limits, with each alpha step the short way round where alpha
+ * does not wrap (else QRTCAN_E_RANGE: the drives' own limits are the last
+ * guard, not the only one). Accepted only with the
  * arm at rest: READY, or STOPPED once every drive reports its quick stop
  * finished (target reached); QRTCAN_E_CMD otherwise (MOVING: stop first,
  * or wait for the path to finish). QRTCAN_E_ARG for n outside
  * 1..QRTCAN_MASTER_MAX_WAYPOINTS or non-finite values. */
 int qrtcan_master_set_path(struct qrtcan_master *m, const double (*wp)[3],
                            int n, uint64_t now_us);
+
+/* The first of the n waypoints outside cfg's joint limits, or after an
+ * alpha step the long way round where alpha does not wrap; -1 if none (the
+ * test set_path makes, for a caller that would say which). */
+int qrtcan_path_outside_limits(const struct qrtcan_master_config *cfg,
+                               const double (*wp)[3], int n);
 
 /* Stop now: quick stop to every drive, queued ahead of anything else. The
  * master stays STOPPED until the next path (which re-enables the drives). */

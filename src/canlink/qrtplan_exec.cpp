@@ -184,6 +184,23 @@ int main(int argc, char **argv)
     std::string why = where ? "" : read_plan(plan_path, &wps);
     if (!why.empty())
         return fail_input(why);
+    // a plain array for the C master (read_plan takes at most its 256)
+    double flat[QRTCAN_MASTER_MAX_WAYPOINTS][3];
+    for (size_t i = 0; i < wps.size(); i++)
+        for (size_t j = 0; j < 3; j++)
+            flat[i][j] = wps[i][j];
+    int outside = wps.empty()
+                      ? -1
+                      : qrtcan_path_outside_limits(&cfg, flat, int(wps.size()));
+    if (outside >= 0) {
+        const auto &w = wps[size_t(outside)];
+        return fail_input(
+            plan_path + ": waypoint " + std::to_string(outside) + " (" +
+            std::to_string(w[0]) + ", " + std::to_string(w[1]) + ", " +
+            std::to_string(w[2]) +
+            ") is outside the joint limits of design.md section 3, or "
+            "alpha steps more than 180 degrees to it");
+    }
     FILE *trace = nullptr;
     if (!trace_path.empty() && !(trace = std::fopen(trace_path.c_str(), "w")))
         return fail_input(trace_path + ": " + std::strerror(errno));
@@ -231,7 +248,7 @@ int main(int argc, char **argv)
         }
         if (!where && !sent && st.master.state == QRTCAN_MASTER_READY) {
             int r = link.set_path(wps);
-            if (r == QRTCAN_E_RANGE) {
+            if (r == QRTCAN_E_RANGE) { // the limits were checked above
                 std::fprintf(stderr,
                              "qrtplan-exec: the arm stands at (%.3f, %.3f, "
                              "%.3f), the plan starts at (%.3f, %.3f, %.3f): "

@@ -23,6 +23,8 @@
 /* A path's first waypoint must be where the arm is (the daemon plans from
  * the measured joints): a larger gap would be an unplanned motion. */
 #define START_TOLERANCE_DEG 1.0
+/* waypoints written as text and read back may stray this far past a limit */
+#define LIMIT_SLACK_DEG 1e-6
 
 /* One step of an SDO sequence: write value (size bytes) or read. */
 struct sdo_step {
@@ -57,6 +59,12 @@ void qrtcan_master_config_default(struct qrtcan_master_config *cfg)
         cfg->max_speed_deg_s[j] = 30.0;
         cfg->max_accel_deg_s2[j] = 60.0;
     }
+    cfg->limit_deg[0][0] = -180.0; /* design.md section 3 */
+    cfg->limit_deg[0][1] = 180.0;
+    cfg->limit_deg[1][0] = -40.0;
+    cfg->limit_deg[1][1] = 180.0;
+    cfg->limit_deg[2][0] = -180.0;
+    cfg->limit_deg[2][1] = 140.0;
     cfg->master_node = 127;
     cfg->sync_period_us = 10000;
     cfg->master_heartbeat_us = 100000;
@@ -234,7 +242,9 @@ int qrtcan_master_init(struct qrtcan_master *m,
             !(cfg->max_speed_deg_s[j] > 0.0) ||
             !(cfg->max_accel_deg_s2[j] > 0.0) ||
             !isfinite(cfg->max_speed_deg_s[j]) ||
-            !isfinite(cfg->max_accel_deg_s2[j]))
+            !isfinite(cfg->max_accel_deg_s2[j]) ||
+            !(cfg->limit_deg[j][0] < cfg->limit_deg[j][1]) ||
+            !(cfg->limit_deg[j][0] >= -180.0 && cfg->limit_deg[j][1] <= 180.0))
             return QRTCAN_E_ARG;
         for (k = 0; k < j; k++)
             if (cfg->node[k] == cfg->node[j])
@@ -308,6 +318,38 @@ static double joint_deg(const struct qrtcan_master *m, int j)
     return deg;
 }
 
+/* Alpha wraps (and has no limit) iff its limits are the whole circle, as
+ * in the planner (design.md section 3). */
+static int joint_wraps(const struct qrtcan_master_config *cfg, int j)
+{
+    return j == 0 && cfg->limit_deg[0][0] == -180.0 &&
+           cfg->limit_deg[0][1] == 180.0;
+}
+
+/* Limits are a box, so a straight step between two waypoints inside stays
+ * inside; an alpha that does not wrap must also step the short way
+ * (-180, 180], as the drives will take it: a longer step would turn the
+ * other way, through its dead zone. */
+int qrtcan_path_outside_limits(const struct qrtcan_master_config *cfg,
+                               const double (*wp)[3], int n)
+{
+    int i, j;
+    for (i = 0; i < n; i++)
+        for (j = 0; j < QRTCAN_JOINTS; j++) {
+            const double *lim = cfg->limit_deg[j];
+            if (joint_wraps(cfg, j))
+                continue;
+            if (!(wp[i][j] >= lim[0] - LIMIT_SLACK_DEG &&
+                  wp[i][j] <= lim[1] + LIMIT_SLACK_DEG))
+                return i;
+            if (j == 0 && i > 0 &&
+                !(wp[i][0] - wp[i - 1][0] > -180.0 &&
+                  wp[i][0] - wp[i - 1][0] <= 180.0))
+                return i;
+        }
+    return -1;
+}
+
 int qrtcan_master_set_path(struct qrtcan_master *m, const double (*wp)[3],
                            int n, uint64_t now_us)
 {
@@ -318,6 +360,8 @@ int qrtcan_master_set_path(struct qrtcan_master *m, const double (*wp)[3],
         for (j = 0; j < QRTCAN_JOINTS; j++)
             if (!isfinite(wp[i][j]))
                 return QRTCAN_E_ARG;
+    if (qrtcan_path_outside_limits(&m->cfg, wp, n) >= 0)
+        return QRTCAN_E_RANGE;
     if (m->state != QRTCAN_MASTER_READY && m->state != QRTCAN_MASTER_STOPPED)
         return QRTCAN_E_CMD;
     if (m->state == QRTCAN_MASTER_STOPPED &&

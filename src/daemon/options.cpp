@@ -279,6 +279,10 @@ int parse_options(int argc, char **argv, Options *o, std::string *error)
         if (!apply(o, key, args[++i], error))
             return 2;
     }
+    // the drives are held to the joint limits the plans are made within
+    for (int j = 0; j < 3; j++)
+        for (int k = 0; k < 2; k++)
+            o->can.limit_deg[j][k] = o->params.arm.limit_deg[j][k];
     return 0;
 }
 

@@ -237,6 +237,45 @@ int main(void)
     qrtcan_master_config_default(&bad);
     bad.scale[2].counts_per_deg = NAN;
     CHECK(qrtcan_master_init(&m, &bad, 0) == QRTCAN_E_ARG, "NaN scale");
+    qrtcan_master_config_default(&bad);
+    bad.limit_deg[1][0] = bad.limit_deg[1][1];
+    CHECK(qrtcan_master_init(&m, &bad, 0) == QRTCAN_E_ARG, "empty limits");
+    qrtcan_master_config_default(&bad);
+    bad.limit_deg[2][1] = NAN;
+    CHECK(qrtcan_master_init(&m, &bad, 0) == QRTCAN_E_ARG, "NaN limit");
+    qrtcan_master_config_default(&bad);
+    bad.limit_deg[0][1] = 200.0;
+    CHECK(qrtcan_master_init(&m, &bad, 0) == QRTCAN_E_ARG, "limit past 180");
+
+    /* limits, checked before anything else about the path: alpha on
+     * [-170, 170] does not wrap, so a step of more than 180 degrees (which
+     * the drives would take the short way, through its dead zone) is
+     * refused even between two waypoints inside */
+    {
+        static struct qrtcan_master fenced;
+        static const double ok_path[3][3] = {
+            {0, 0, 0}, {170, -40, 140}, {-9, 180, -180}};
+        static const double past[4][2][3] = {{{0, 0, 0}, {170.01, 0, 0}},
+                                             {{0, 0, 0}, {0, -40.01, 0}},
+                                             {{0, 0, 0}, {0, 0, 140.01}},
+                                             {{0, 0, 0}, {0, 180.01, 0}}};
+        static const double long_way[3][3] = {
+            {0, 0, 0}, {160, 0, 0}, {-160, 0, 0}};
+        struct qrtcan_master_config fence;
+        qrtcan_master_config_default(&fence);
+        fence.limit_deg[0][0] = -170.0;
+        fence.limit_deg[0][1] = 170.0;
+        CHECK(qrtcan_master_init(&fenced, &fence, 0) == QRTCAN_OK, "fence");
+        /* inside: refused only because the drives are not up (E_CMD) */
+        CHECK(qrtcan_master_set_path(&fenced, ok_path, 3, 0) == QRTCAN_E_CMD,
+              "a path on the limits was refused as outside them");
+        for (i = 0; i < 4; i++)
+            CHECK(qrtcan_master_set_path(&fenced, past[i], 2, 0) ==
+                      QRTCAN_E_RANGE,
+                  "waypoint past a limit accepted (case %d)", i);
+        CHECK(qrtcan_master_set_path(&fenced, long_way, 3, 0) == QRTCAN_E_RANGE,
+              "alpha 160 -> -160 would go the short way through 180");
+    }
 
     /* bring-up */
     power_up();
@@ -294,8 +333,13 @@ int main(void)
         CHECK(qrtcan_master_set_path(&m, far, 2, clock_us) == QRTCAN_E_RANGE,
               "a path from elsewhere must be refused");
         static const double nan_path[2][3] = {{-170, 30, 0}, {NAN, 0, 0}};
+        static const double sigma_past[2][3] = {{-170, 30, 0}, {-170, 181, 0}};
         CHECK(qrtcan_master_set_path(&m, nan_path, 2, clock_us) == QRTCAN_E_ARG,
               "NaN waypoint");
+        /* alpha wraps with the default limits; sigma does not */
+        CHECK(qrtcan_master_set_path(&m, sigma_past, 2, clock_us) ==
+                  QRTCAN_E_RANGE,
+              "sigma 181 accepted");
     }
 
     /* quick stop in the middle of a move, then a new path from there */

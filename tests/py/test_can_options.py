@@ -87,6 +87,14 @@ def test_good_node_ids_accepted():
     ('{"status": "ok", "waypoints_deg": []}', "must be an array of 1..256"),
     ('{"status": "ok", "waypoints_deg": [[0, 0]]}', "is not [a, s, e]"),
     ('{"status": "ok", "waypoints_deg": [[0, "x", 0]]}', "has a non-number"),
+    ('{"status": "ok", "waypoints_deg": [[0, 0, 0], [0, 180.01, 0]]}',
+     "waypoint 1 (0.000000, 180.010000, 0.000000) is outside the joint limits"),
+    ('{"status": "ok", "waypoints_deg": [[0, 0, 0], [0, -40.01, 0]]}',
+     "waypoint 1"),
+    ('{"status": "ok", "waypoints_deg": [[0, 0, 0], [0, 0, 140.01]]}',
+     "waypoint 1"),
+    ('{"status": "ok", "waypoints_deg": [[0, 0, -180.5], [0, 0, 0]]}',
+     "waypoint 0"),
 ])
 def test_exec_refuses_a_plan_it_cannot_use_before_the_bus(tmp_path, text,
                                                           words):
@@ -99,3 +107,16 @@ def test_exec_refuses_a_plan_it_cannot_use_before_the_bus(tmp_path, text,
                        capture_output=True, text=True, timeout=30)
     assert r.returncode == 2, r.stderr
     assert words in r.stderr and "SocketCAN" not in r.stderr
+
+
+def test_exec_takes_a_plan_on_the_limits_and_across_alpha_180(tmp_path):
+    """Waypoints on the limits, and alpha 179 -> -179 (it wraps: 2 degrees
+    the short way), pass the limits and reach the bus (absent here)."""
+    plan = tmp_path / "p.json"
+    plan.write_text('{"status": "ok", "waypoints_deg": '
+                    '[[0, 0, 0], [179, -40, 140], [-179, 180, -180]]}')
+    r = subprocess.run([str(EXEC), "--can", "qrt_no_such_bus", "--timeout",
+                        "5", str(plan)], capture_output=True, text=True,
+                       timeout=30)
+    assert r.returncode != 0 and "joint limits" not in r.stderr, r.stderr
+    assert "qrt_no_such_bus" in r.stderr
