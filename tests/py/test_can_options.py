@@ -1,7 +1,8 @@
-"""The CAN programs' command lines: values that would wrap a 32-bit CiA 402
-object, a node id outside CANopen's 1..127, or a drive that is not simulated
-are refused with one line, before any bus is opened (so these run on a
-machine without SocketCAN)."""
+"""The CAN programs' inputs: values that would wrap a 32-bit CiA 402 object,
+a node id outside CANopen's 1..127, a drive that is not simulated, and plans
+qrtplan-exec cannot use (malformed, or past a joint limit) are refused with
+one line, before any bus is opened (so these run on a machine without
+SocketCAN)."""
 import subprocess
 
 import pytest
