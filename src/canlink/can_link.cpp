@@ -27,12 +27,35 @@ bool parse_node_ids(const std::string &text, unsigned ids[3])
         char *end = nullptr;
         errno = 0;
         unsigned long v = std::strtoul(p, &end, 10);
-        if (errno || v < 1 || v > 127 || *end != (j < 2 ? ',' : '\0'))
+        // v > 127 first: 4294967297 would cast to node 1
+        if (errno || v > 127 || !qrtcan_node_valid(unsigned(v)) ||
+            *end != (j < 2 ? ',' : '\0'))
             return false;
         ids[j] = unsigned(v);
         p = end + 1;
     }
     return ids[0] != ids[1] && ids[1] != ids[2] && ids[0] != ids[2];
+}
+
+// The waypoints as the C master takes them; false beyond its room.
+static bool as_master_path(const std::vector<std::array<double, 3>> &waypoints,
+                           double (*wp)[3])
+{
+    if (waypoints.empty() || waypoints.size() > QRTCAN_MASTER_MAX_WAYPOINTS)
+        return false;
+    for (size_t i = 0; i < waypoints.size(); i++)
+        for (size_t j = 0; j < 3; j++)
+            wp[i][j] = waypoints[i][j];
+    return true;
+}
+
+int path_outside_limits(const qrtcan_master_config &cfg,
+                        const std::vector<std::array<double, 3>> &waypoints)
+{
+    double wp[QRTCAN_MASTER_MAX_WAYPOINTS][3];
+    if (!as_master_path(waypoints, wp))
+        return -1; // set_path refuses these as QRTCAN_E_ARG
+    return qrtcan_path_outside_limits(&cfg, wp, int(waypoints.size()));
 }
 
 namespace
@@ -262,11 +285,8 @@ void CanLink::run()
 int CanLink::set_path(const std::vector<std::array<double, 3>> &waypoints)
 {
     double wp[QRTCAN_MASTER_MAX_WAYPOINTS][3];
-    if (waypoints.empty() || waypoints.size() > QRTCAN_MASTER_MAX_WAYPOINTS)
+    if (!as_master_path(waypoints, wp))
         return QRTCAN_E_ARG;
-    for (size_t i = 0; i < waypoints.size(); i++)
-        for (int j = 0; j < 3; j++)
-            wp[i][j] = waypoints[i][size_t(j)];
     std::lock_guard<std::mutex> lock(mu_);
     uint64_t now = now_us();
     int rc = qrtcan_master_set_path(&master_, wp, int(waypoints.size()), now);

@@ -43,6 +43,11 @@ struct CanLinkStatus {
 // or wider, so that no id wraps into the range.
 bool parse_node_ids(const std::string &text, unsigned ids[3]);
 
+// The first waypoint outside cfg's joint limits (qrtcan_path_outside_limits,
+// the test CanLink::set_path meets in the master), or -1 if none.
+int path_outside_limits(const qrtcan_master_config &cfg,
+                        const std::vector<std::array<double, 3>> &waypoints);
+
 class CanLink
 {
   public:

@@ -184,14 +184,7 @@ int main(int argc, char **argv)
     std::string why = where ? "" : read_plan(plan_path, &wps);
     if (!why.empty())
         return fail_input(why);
-    // a plain array for the C master (read_plan takes at most its 256)
-    double flat[QRTCAN_MASTER_MAX_WAYPOINTS][3];
-    for (size_t i = 0; i < wps.size(); i++)
-        for (size_t j = 0; j < 3; j++)
-            flat[i][j] = wps[i][j];
-    int outside = wps.empty()
-                      ? -1
-                      : qrtcan_path_outside_limits(&cfg, flat, int(wps.size()));
+    int outside = qrt::path_outside_limits(cfg, wps);
     if (outside >= 0) {
         const auto &w = wps[size_t(outside)];
         return fail_input(
