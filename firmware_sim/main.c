@@ -90,6 +90,37 @@ static int parse_long(const char *s, long lo, long hi, long *out)
     return 0;
 }
 
+/* "A,B,..." of 1..MAX_DRIVES distinct decimal ids in 1..127; every field
+ * must hold one (strtok would skip the empty one in "1,,3" or "1,2,"). */
+static int parse_node_list(const char *s, unsigned *nodes, unsigned *n_out)
+{
+    unsigned n = 0, j;
+    for (;;) {
+        char *end;
+        unsigned long x;
+        if (*s < '0' || *s > '9' || n == MAX_DRIVES) {
+            return -1; /* no sign or space: strtoul takes both */
+        }
+        errno = 0;
+        x = strtoul(s, &end, 10);
+        if (errno != 0 || x < 1 || x > 127 || (*end != ',' && *end != 0)) {
+            return -1;
+        }
+        for (j = 0; j < n; j++) {
+            if (nodes[j] == (unsigned)x) {
+                return -1; /* one drive an id */
+            }
+        }
+        nodes[n++] = (unsigned)x;
+        if (*end == 0) {
+            break;
+        }
+        s = end + 1;
+    }
+    *n_out = n;
+    return 0;
+}
+
 static int parse_seconds(const char *s, double *out)
 {
     char *end;
@@ -129,7 +160,6 @@ int main(int argc, char **argv)
 
     for (a = 1; a < argc; a++) {
         const char *o = argv[a], *v = a + 1 < argc ? argv[a + 1] : 0;
-        long x;
         int bad = 0;
         if (strcmp(o, "--help") == 0 || strcmp(o, "-h") == 0) {
             usage(stdout);
@@ -147,21 +177,7 @@ int main(int argc, char **argv)
         if (strcmp(o, "--iface") == 0) {
             iface = v;
         } else if (strcmp(o, "--nodes") == 0) {
-            char buf[128], *tok, *save = 0;
-            n_nodes = 0;
-            snprintf(buf, sizeof buf, "%s", v);
-            for (tok = strtok_r(buf, ",", &save); tok && !bad;
-                 tok = strtok_r(0, ",", &save)) {
-                unsigned j;
-                bad = n_nodes == MAX_DRIVES || parse_long(tok, 1, 127, &x);
-                for (j = 0; j < n_nodes && !bad; j++) {
-                    bad = nodes[j] == (unsigned)x; /* one drive an id */
-                }
-                if (!bad) {
-                    nodes[n_nodes++] = (unsigned)x;
-                }
-            }
-            bad = bad || n_nodes == 0 || strlen(v) >= sizeof buf;
+            bad = parse_node_list(v, nodes, &n_nodes);
         } else if (strcmp(o, "--counts-per-deg") == 0) {
             char *end;
             counts_per_deg = strtod(v, &end);
