@@ -121,6 +121,17 @@ static int parse_node_list(const char *s, unsigned *nodes, unsigned *n_out)
     return 0;
 }
 
+static int is_simulated(const unsigned *nodes, unsigned n_nodes, long id)
+{
+    unsigned j;
+    for (j = 0; j < n_nodes; j++) {
+        if ((long)nodes[j] == id) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
 static int parse_seconds(const char *s, double *out)
 {
     char *end;
@@ -228,15 +239,24 @@ int main(int argc, char **argv)
         }
     }
 
+    /* an option naming a node that is not simulated would silently do
+     * nothing: a fault test would wait for a fault that never comes */
     for (i = 0; i < n_lim; i++) {
-        unsigned j;
-        for (j = 0; j < n_nodes && nodes[j] != (unsigned long)lim_id[i]; j++)
-            ;
-        if (j == n_nodes) {
+        if (!is_simulated(nodes, n_nodes, lim_id[i])) {
             fprintf(stderr, "servo_sim: --limit for node %ld, not in --nodes\n",
                     lim_id[i]);
             return 2;
         }
+    }
+    if (fault_node != 0 && !is_simulated(nodes, n_nodes, fault_node)) {
+        fprintf(stderr, "servo_sim: --fault-node %ld, not in --nodes\n",
+                fault_node);
+        return 2;
+    }
+    if (mute_node != 0 && !is_simulated(nodes, n_nodes, mute_node)) {
+        fprintf(stderr, "servo_sim: --mute-node %ld, not in --nodes\n",
+                mute_node);
+        return 2;
     }
     /* the power-up positions in counts must fit 0x6064's INTEGER32 */
     for (i = 0; i < 3; i++) {

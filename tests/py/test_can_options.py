@@ -39,6 +39,8 @@ def run_sim(args):
     (["--limit", "2:1:2147483648"], "bad value for --limit"),
     (["--limit", "2:5:1"], "bad value for --limit"),
     (["--limit", "5:1:2"], "--limit for node 5, not in --nodes"),
+    (["--fault-node", "4", "--fault-at", "0"], "--fault-node 4, not in --nodes"),
+    (["--nodes", "4,5,6", "--mute-node", "1"], "--mute-node 1, not in --nodes"),
     (["--start-deg", "100000,0,0", "--counts-per-deg", "100000"],
      "beyond a 32-bit position"),
     (["--start-deg", "nan,0,0"], "bad value for --start-deg"),
