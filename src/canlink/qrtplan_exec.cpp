@@ -42,6 +42,11 @@ const char *kUsage =
     "  --counts-per-deg X   drive counts per joint degree, all joints (1000)\n"
     "  --speed DEG_S        top joint speed (30); --accel DEG_S2 (60)\n"
     "  --timeout S          give up after S seconds (120)\n"
+    "  --limits-deg a0,a1,s0,s1,e0,e1  this arm's joint limits; a plan\n"
+    "                       with a waypoint outside them is refused\n"
+    "                       before the bus opens (design.md section 3:\n"
+    "                       -180,180,-40,180,-180,140; alpha wraps only\n"
+    "                       with -180,180)\n"
     "  --heartbeat-timeout MS  a drive silent this long is lost (300)\n"
     "  --trace FILE         CSV of time and joint positions read back\n"
     "  --where              bring the drives up, print their joints as\n"
@@ -65,6 +70,29 @@ bool parse_double(const char *s, double *out)
     if (errno || end == s || *end || !(v == v) || v > 1e12 || v < -1e12)
         return false;
     *out = v;
+    return true;
+}
+
+// "a0,a1,s0,s1,e0,e1": each joint's limits in degrees, low below high and
+// within [-180, 180] (what qrtcan_master_init takes).
+bool parse_limits(const char *s, double (*lim)[2])
+{
+    double v[6];
+    for (int k = 0; k < 6; k++) {
+        const char *comma = std::strchr(s, ',');
+        std::string field = comma ? std::string(s, comma) : std::string(s);
+        if (!parse_double(field.c_str(), &v[k]) ||
+            (k < 5) != (comma != nullptr))
+            return false;
+        s = comma ? comma + 1 : s;
+    }
+    for (int j = 0; j < 3; j++) {
+        if (!(v[2 * j] < v[2 * j + 1] && v[2 * j] >= -180.0 &&
+              v[2 * j + 1] <= 180.0))
+            return false;
+        lim[j][0] = v[2 * j];
+        lim[j][1] = v[2 * j + 1];
+    }
     return true;
 }
 
@@ -159,6 +187,11 @@ int main(int argc, char **argv)
             for (int j = 0; j < 3; j++)
                 (a == "--speed" ? cfg.max_speed_deg_s
                                 : cfg.max_accel_deg_s2)[j] = v;
+        } else if (a == "--limits-deg") {
+            if (!parse_limits(value(a.c_str()), cfg.limit_deg))
+                return fail_input("--limits-deg wants six numbers "
+                                  "a0,a1,s0,s1,e0,e1 in -180..180, each "
+                                  "low below its high");
         } else if (a == "--heartbeat-timeout") {
             if (!parse_double(value(a.c_str()), &v) || v < 20 || v > 60000)
                 return fail_input("--heartbeat-timeout wants 20..60000 ms");
@@ -187,12 +220,11 @@ int main(int argc, char **argv)
     int outside = qrt::path_outside_limits(cfg, wps);
     if (outside >= 0) {
         const auto &w = wps[size_t(outside)];
-        return fail_input(
-            plan_path + ": waypoint " + std::to_string(outside) + " (" +
-            std::to_string(w[0]) + ", " + std::to_string(w[1]) + ", " +
-            std::to_string(w[2]) +
-            ") is outside the joint limits of design.md section 3, or "
-            "alpha steps more than 180 degrees to it");
+        return fail_input(plan_path + ": waypoint " + std::to_string(outside) +
+                          " (" + std::to_string(w[0]) + ", " +
+                          std::to_string(w[1]) + ", " + std::to_string(w[2]) +
+                          ") is outside the joint limits (--limits-deg), or "
+                          "alpha steps more than 180 degrees to it");
     }
     FILE *trace = nullptr;
     if (!trace_path.empty() && !(trace = std::fopen(trace_path.c_str(), "w")))

@@ -130,3 +130,43 @@ def test_exec_takes_a_plan_on_the_limits_and_across_alpha_180(tmp_path):
                        timeout=30)
     assert r.returncode != 0 and "joint limits" not in r.stderr, r.stderr
     assert "qrt_no_such_bus" in r.stderr
+
+
+def run_exec_with_limits(tmp_path, limits, waypoints):
+    plan = tmp_path / "p.json"
+    plan.write_text('{"status": "ok", "waypoints_deg": %s}' % waypoints)
+    return subprocess.run([str(EXEC), "--can", "qrt_no_such_bus", "--timeout",
+                           "5", "--limits-deg", limits, str(plan)],
+                          capture_output=True, text=True, timeout=30)
+
+
+@pytest.mark.parametrize("limits,waypoints,refused", [
+    # sigma narrowed to 90: a plan made for design.md's 180 is refused
+    ("-180,180,-40,90,-180,140", "[[0, 0, 0], [0, 120, 0]]", "waypoint 1"),
+    ("-180,180,-40,90,-180,140", "[[0, 0, 0], [0, 90, 0]]", None),
+    # alpha not wrapping: 160 -> -160 is a 320 degree turn, not 40
+    ("-170,170,-40,180,-180,140", "[[0, 0, 0], [160, 0, 0], [-160, 0, 0]]",
+     "waypoint 2"),
+    ("-170,170,-40,180,-180,140", "[[0, 0, 0], [175, 0, 0]]", "waypoint 1"),
+    ("-180,180,-40,180,-180,140", "[[160, 0, 0], [-160, 0, 0]]", None),
+])
+def test_exec_checks_the_plan_against_the_arms_limits(tmp_path, limits,
+                                                      waypoints, refused):
+    r = run_exec_with_limits(tmp_path, limits, waypoints)
+    if refused:
+        assert r.returncode == 2, r.stderr
+        assert refused + " (" in r.stderr and "joint limits" in r.stderr
+    else:
+        assert r.returncode != 0 and "joint limits" not in r.stderr, r.stderr
+        assert "qrt_no_such_bus" in r.stderr
+
+
+@pytest.mark.parametrize("limits", [
+    "-180,180,-40,90,-180", "-180,180,-40,90,-180,140,0",
+    "-180,180,-40,90,-180,140,", "-180,180,-40,,-180,140",
+    "-180,180,90,-40,-180,140", "-180,180,-40,190,-180,140",
+    "nan,180,-40,90,-180,140", "-180,inf,-40,90,-180,140", "",
+])
+def test_exec_refuses_bad_limits(tmp_path, limits):
+    r = run_exec_with_limits(tmp_path, limits, "[[0, 0, 0]]")
+    assert r.returncode == 2 and "--limits-deg wants six numbers" in r.stderr
