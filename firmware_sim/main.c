@@ -13,6 +13,7 @@
 
 #include "drive.h"
 #include "qrtcan/emcy.h"
+#include "qrtcan/frame.h"
 #include "socketcan.h"
 
 #define MAX_DRIVES 8
@@ -90,37 +91,6 @@ static int parse_long(const char *s, long lo, long hi, long *out)
     return 0;
 }
 
-/* "A,B,..." of 1..MAX_DRIVES distinct decimal ids in 1..127; every field
- * must hold one (strtok would skip the empty one in "1,,3" or "1,2,"). */
-static int parse_node_list(const char *s, unsigned *nodes, unsigned *n_out)
-{
-    unsigned n = 0, j;
-    for (;;) {
-        char *end;
-        unsigned long x;
-        if (*s < '0' || *s > '9' || n == MAX_DRIVES) {
-            return -1; /* no sign or space: strtoul takes both */
-        }
-        errno = 0;
-        x = strtoul(s, &end, 10);
-        if (errno != 0 || x < 1 || x > 127 || (*end != ',' && *end != 0)) {
-            return -1;
-        }
-        for (j = 0; j < n; j++) {
-            if (nodes[j] == (unsigned)x) {
-                return -1; /* one drive an id */
-            }
-        }
-        nodes[n++] = (unsigned)x;
-        if (*end == 0) {
-            break;
-        }
-        s = end + 1;
-    }
-    *n_out = n;
-    return 0;
-}
-
 static int is_simulated(const unsigned *nodes, unsigned n_nodes, long id)
 {
     unsigned j;
@@ -188,7 +158,7 @@ int main(int argc, char **argv)
         if (strcmp(o, "--iface") == 0) {
             iface = v;
         } else if (strcmp(o, "--nodes") == 0) {
-            bad = parse_node_list(v, nodes, &n_nodes);
+            bad = qrtcan_parse_node_list(v, nodes, MAX_DRIVES, &n_nodes) != 0;
         } else if (strcmp(o, "--counts-per-deg") == 0) {
             char *end;
             counts_per_deg = strtod(v, &end);

@@ -62,6 +62,15 @@ enum qrtcan_kind {
 /* 1 if node is a valid CANopen node id (1..127). */
 int qrtcan_node_valid(unsigned node);
 
+/* Reads "A,B,..." into ids[0..*n_ids): 1..max_ids distinct node ids, each
+ * field decimal digits only (no sign, space or prefix) of a valid node.
+ * QRTCAN_OK, or QRTCAN_E_ARG for anything else, among them an empty field
+ * ("1,,3", "1,2,"), with *n_ids untouched (ids may be partly written). For
+ * command lines and configs: a mistyped id must not wrap onto another drive's.
+ */
+int qrtcan_parse_node_list(const char *text, unsigned *ids, unsigned max_ids,
+                           unsigned *n_ids);
+
 /* The COB-ID of function fn for node (fn + node), or 0 with an invalid node. */
 uint32_t qrtcan_cob_id(enum qrtcan_function fn, unsigned node);
 

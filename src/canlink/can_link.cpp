@@ -20,21 +20,9 @@ namespace qrt
 
 bool parse_node_ids(const std::string &text, unsigned ids[3])
 {
-    const char *p = text.c_str();
-    for (int j = 0; j < 3; j++) {
-        if (*p < '0' || *p > '9') // no sign, no space: strtoul takes both
-            return false;
-        char *end = nullptr;
-        errno = 0;
-        unsigned long v = std::strtoul(p, &end, 10);
-        // v > 127 first: 4294967297 would cast to node 1
-        if (errno || v > 127 || !qrtcan_node_valid(unsigned(v)) ||
-            *end != (j < 2 ? ',' : '\0'))
-            return false;
-        ids[j] = unsigned(v);
-        p = end + 1;
-    }
-    return ids[0] != ids[1] && ids[1] != ids[2] && ids[0] != ids[2];
+    unsigned n = 0;
+    return qrtcan_parse_node_list(text.c_str(), ids, 3, &n) == QRTCAN_OK &&
+           n == 3;
 }
 
 // The waypoints as the C master takes them; false beyond its room.

@@ -5,6 +5,42 @@ int qrtcan_node_valid(unsigned node)
     return node >= QRTCAN_NODE_MIN && node <= QRTCAN_NODE_MAX;
 }
 
+int qrtcan_parse_node_list(const char *text, unsigned *ids, unsigned max_ids,
+                           unsigned *n_ids)
+{
+    unsigned n = 0, j;
+    if (!text || !ids || !n_ids) {
+        return QRTCAN_E_ARG;
+    }
+    for (;;) {
+        unsigned id = 0;
+        if (*text < '0' || *text > '9' || n == max_ids) {
+            return QRTCAN_E_ARG;
+        }
+        /* stop past QRTCAN_NODE_MAX, before a long field can wrap */
+        for (; *text >= '0' && *text <= '9'; text++) {
+            id = id * 10u + (unsigned)(*text - '0');
+            if (id > QRTCAN_NODE_MAX) {
+                return QRTCAN_E_ARG;
+            }
+        }
+        if (!qrtcan_node_valid(id) || (*text != ',' && *text != 0)) {
+            return QRTCAN_E_ARG;
+        }
+        for (j = 0; j < n; j++) {
+            if (ids[j] == id) {
+                return QRTCAN_E_ARG;
+            }
+        }
+        ids[n++] = id;
+        if (*text++ == 0) {
+            break;
+        }
+    }
+    *n_ids = n;
+    return QRTCAN_OK;
+}
+
 uint32_t qrtcan_cob_id(enum qrtcan_function fn, unsigned node)
 {
     if (!qrtcan_node_valid(node)) {

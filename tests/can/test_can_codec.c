@@ -340,6 +340,36 @@ static uint32_t rnd(uint32_t *x)
     return *x;
 }
 
+static void test_node_list(void)
+{
+    static const char *const bad[] = {
+        "",        "0",    "128",        "1,1",
+        "1,,3",    "1,2,", ",1",         "+1",
+        " 1",      "1 ",   "0x2",        "-1",
+        "1,2,3,4", "1;2",  "4294967297", "99999999999999999999",
+        "1,128",   "12a",
+    };
+    unsigned ids[4] = {0}, n = 99, i;
+    CHECK(qrtcan_parse_node_list("1,2,3", ids, 3, &n) == QRTCAN_OK);
+    CHECK(n == 3 && ids[0] == 1 && ids[1] == 2 && ids[2] == 3);
+    CHECK(qrtcan_parse_node_list("127", ids, 3, &n) == QRTCAN_OK);
+    CHECK(n == 1 && ids[0] == 127);
+    CHECK(qrtcan_parse_node_list("007,10", ids, 3, &n) == QRTCAN_OK);
+    CHECK(n == 2 && ids[0] == 7 && ids[1] == 10);
+    CHECK(qrtcan_parse_node_list("4,3,2,1", ids, 4, &n) == QRTCAN_OK);
+    CHECK(n == 4 && ids[0] == 4 && ids[3] == 1);
+    for (i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        n = 99;
+        if (qrtcan_parse_node_list(bad[i], ids, 3, &n) != QRTCAN_E_ARG ||
+            n != 99) {
+            fprintf(stderr, "node list \"%s\" taken\n", bad[i]);
+            failures++;
+        }
+    }
+    CHECK(qrtcan_parse_node_list(0, ids, 3, &n) == QRTCAN_E_ARG);
+    CHECK(qrtcan_parse_node_list("1", ids, 0, &n) == QRTCAN_E_ARG);
+}
+
 static void test_garbage(void)
 {
     uint32_t seed = 0x9E3779B9u;
@@ -420,6 +450,7 @@ int main(void)
     test_sdo();
     test_cia402();
     test_scale();
+    test_node_list();
     test_garbage();
     if (failures) {
         fprintf(stderr, "test_can_codec: %d checks failed\n", failures);
