@@ -1,7 +1,9 @@
 // SocketCAN transport and thread for the CiA 402 master; see can_link.hpp.
 #include "can_link.hpp"
 
+#include <cctype>
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
@@ -23,6 +25,39 @@ bool parse_node_ids(const std::string &text, unsigned ids[3])
     unsigned n = 0;
     return qrtcan_parse_node_list(text.c_str(), ids, 3, &n) == QRTCAN_OK &&
            n == 3;
+}
+
+bool parse_numbers(const std::string &text, double *out, int n)
+{
+    const char *p = text.c_str();
+    for (int k = 0; k < n; k++) {
+        char *end = nullptr;
+        if (*p == '\0' || std::isspace(static_cast<unsigned char>(*p)))
+            return false; // strtod would skip the space
+        errno = 0;
+        out[k] = std::strtod(p, &end);
+        if (errno || end == p || !std::isfinite(out[k]) ||
+            *end != (k + 1 < n ? ',' : '\0'))
+            return false;
+        p = end + 1;
+    }
+    return true;
+}
+
+bool parse_limits_deg(const std::string &text, double lim[3][2])
+{
+    double v[6];
+    if (!parse_numbers(text, v, 6))
+        return false;
+    for (int j = 0; j < 3; j++)
+        if (!(v[2 * j] < v[2 * j + 1] && v[2 * j] >= -180.0 &&
+              v[2 * j + 1] <= 180.0))
+            return false;
+    for (int j = 0; j < 3; j++) {
+        lim[j][0] = v[2 * j];
+        lim[j][1] = v[2 * j + 1];
+    }
+    return true;
 }
 
 // The waypoints as the C master takes them; false beyond its room.

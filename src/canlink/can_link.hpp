@@ -43,6 +43,16 @@ struct CanLinkStatus {
 // or wider, so that no id wraps into the range.
 bool parse_node_ids(const std::string &text, unsigned ids[3]);
 
+// "x,y,...": exactly n finite numbers, each field all number (no space,
+// nothing empty). False, with out partly written, for anything else.
+bool parse_numbers(const std::string &text, double *out, int n);
+
+// "a0,a1,s0,s1,e0,e1": the joint limits in degrees, as the daemon's
+// --limits-deg and qrtplan-exec's take them: each low below its high, all
+// within [-180, 180] (what the master takes). False for anything else, with
+// lim untouched.
+bool parse_limits_deg(const std::string &text, double lim[3][2]);
+
 // The first waypoint outside cfg's joint limits (qrtcan_path_outside_limits,
 // the test CanLink::set_path meets in the master), or -1 if none.
 int path_outside_limits(const qrtcan_master_config &cfg,

@@ -73,29 +73,6 @@ bool parse_double(const char *s, double *out)
     return true;
 }
 
-// "a0,a1,s0,s1,e0,e1": each joint's limits in degrees, low below high and
-// within [-180, 180] (what qrtcan_master_init takes).
-bool parse_limits(const char *s, double (*lim)[2])
-{
-    double v[6];
-    for (int k = 0; k < 6; k++) {
-        const char *comma = std::strchr(s, ',');
-        std::string field = comma ? std::string(s, comma) : std::string(s);
-        if (!parse_double(field.c_str(), &v[k]) ||
-            (k < 5) != (comma != nullptr))
-            return false;
-        s = comma ? comma + 1 : s;
-    }
-    for (int j = 0; j < 3; j++) {
-        if (!(v[2 * j] < v[2 * j + 1] && v[2 * j] >= -180.0 &&
-              v[2 * j + 1] <= 180.0))
-            return false;
-        lim[j][0] = v[2 * j];
-        lim[j][1] = v[2 * j + 1];
-    }
-    return true;
-}
-
 // The plan's waypoints, or an error message.
 std::string read_plan(const std::string &path,
                       std::vector<std::array<double, 3>> *wps)
@@ -188,7 +165,7 @@ int main(int argc, char **argv)
                 (a == "--speed" ? cfg.max_speed_deg_s
                                 : cfg.max_accel_deg_s2)[j] = v;
         } else if (a == "--limits-deg") {
-            if (!parse_limits(value(a.c_str()), cfg.limit_deg))
+            if (!qrt::parse_limits_deg(value(a.c_str()), cfg.limit_deg))
                 return fail_input("--limits-deg wants six numbers "
                                   "a0,a1,s0,s1,e0,e1 in -180..180, each "
                                   "low below its high");
