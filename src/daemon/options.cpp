@@ -44,7 +44,14 @@ const char *kUsage =
     "  --margin M               workspace margin, metres (0.01)\n"
     "  --cspace-margin DEG      C-space margin (paper Eq. 12), degrees (0)\n"
     "  --grid DEG               lattice spacing, degrees (5)\n"
-    "  --link-radius M          every link's radius, metres (0.02)\n"
+    "  --links L1,L2,L3         the arm's link lengths, metres\n"
+    "                           (design.md section 3: 0.09,0.332,0.538)\n"
+    "  --link-radius M[,M2,M3]  the links' radii, metres: one for every\n"
+    "                           link, or one each (0.02)\n"
+    "  --limits-deg a0,a1,s0,s1,e0,e1  the joint limits the plans keep\n"
+    "                           to and the drives are held to (design.md\n"
+    "                           section 3: -180,180,-40,180,-180,140;\n"
+    "                           alpha wraps only with -180,180)\n"
     "  --dijkstra               plain Dijkstra instead of A* (same cost)\n"
     "  --can IFACE              drive the arm on SocketCAN IFACE (off)\n"
     "  --can-nodes A,B,C        drive node ids of alpha, sigma, eta (1,2,3)\n"
@@ -138,10 +145,27 @@ bool apply(Options *o, const std::string &key, const std::string &value,
             return bad("degrees (a divisor of 20 at least the build's)");
         o->params.grid_deg = v;
     } else if (key == "link-radius") {
-        if (!number(0.001, 0.5))
-            return bad("metres in 0.001..0.5");
-        for (double &r : o->params.arm.link_radius_m)
-            r = v;
+        double r[3];
+        bool one = value.find(',') == std::string::npos;
+        if (!(one ? parse_numbers(value, r, 1) : parse_numbers(value, r, 3)))
+            return bad("metres in 0.001..0.5, one for every link or three");
+        for (int j = 0; j < 3; j++) {
+            if (!(r[one ? 0 : j] >= 0.001 && r[one ? 0 : j] <= 0.5))
+                return bad("metres in 0.001..0.5, one for every link or three");
+            o->params.arm.link_radius_m[j] = r[one ? 0 : j];
+        }
+    } else if (key == "links") {
+        double l[3];
+        if (!parse_numbers(value, l, 3) ||
+            !(l[0] >= 0.001 && l[0] <= 10 && l[1] >= 0.001 && l[1] <= 10 &&
+              l[2] >= 0.001 && l[2] <= 10))
+            return bad("three lengths L1,L2,L3 in metres, each in 0.001..10");
+        for (int j = 0; j < 3; j++)
+            o->params.arm.link_m[j] = l[j];
+    } else if (key == "limits-deg") {
+        if (!parse_limits_deg(value, o->params.arm.limit_deg))
+            return bad("a0,a1,s0,s1,e0,e1 in -180..180, each low below its "
+                       "high");
     } else if (key == "dijkstra") {
         o->params.use_astar = 0;
     } else if (key == "can") {

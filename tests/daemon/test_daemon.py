@@ -110,6 +110,47 @@ def test_start_from_the_joint_state(daemon):
     assert_safe(scene, p, pts)
 
 
+ARM_LINKS = [0.1, 0.4, 0.45]
+ARM_LIMITS = [[-180, 180], [-10, 170], [-150, 130]]  # sigma >= -10
+
+
+def test_the_arm_from_the_options(daemon):
+    """Another arm's links and limits, and a goal as a point: with design.md's
+    arm the Table 4 detour dips to sigma -20 (outside these limits), and the
+    goal's joints would put this arm's tip elsewhere: the oracle, given this
+    arm, fails either."""
+    d, c = daemon("--links", ",".join(map(str, ARM_LINKS)),
+                  "--limits-deg", ",".join(str(x) for lim in ARM_LIMITS
+                                           for x in lim))
+    scene, pts = scene_points("table4_one_sphere.json")
+    a = np.radians(100.0)
+    reach = sum(ARM_LINKS)
+    goal = [reach * np.cos(a), reach * np.sin(a), 0.0]
+    c.publish("QRT_SCAN", scan_from_points(pts))
+    c.publish("QRT_PLAN_REQUEST", request(goal, kind=1, start=[-100, 0, 0]))
+    p = c.wait_plan(lambda p: p.status == "ok")
+    assert p is not None, d.text()
+    scene = dict(scene, arm={"links_m": ARM_LINKS, "limits_deg": ARM_LIMITS},
+                 goal={"xyz_m": goal})
+    assert_safe(scene, p, pts)
+    assert min(w[1] for w in p.waypoints_deg) >= -10
+
+
+def test_each_links_radius_from_the_options(daemon):
+    """A point 45 mm from link 3 at the start: clear of a 20 mm link with the
+    10 mm margin, not of a 40 mm one. Only link 3's own radius decides."""
+    a = np.radians(-100.0)
+    point = [0.7 * np.cos(a), 0.7 * np.sin(a), 0.045]
+    for radii, status in (("0.04,0.04,0.02", "ok"),
+                          ("0.02,0.02,0.04", "start_blocked")):
+        d, c = daemon("--link-radius", radii)
+        c.publish("QRT_SCAN", scan_from_points([point]))
+        c.publish("QRT_PLAN_REQUEST", request([100, 0, 0], start=[-100, 0, 0]))
+        p = c.wait_plan()
+        assert p is not None, d.text()
+        assert p.status == status, (radii, p.status, p.detail)
+
+
 def test_bad_messages_get_a_status_and_the_daemon_keeps_serving(daemon):
     d, c = daemon()
     good = scan_from_points([[0.5, 0.5, 0.5]])
@@ -298,7 +339,15 @@ def test_help_and_bad_flags():
     for key, value in (("--scan-channel", "QRT.SCAN"), ("--plan-channel", ""),
                        ("--request-channel", "A B"),
                        ("--status-channel", "S" * 64),
-                       ("--joint-channel", "J*"), ("--max-returns", "1.5")):
+                       ("--joint-channel", "J*"), ("--max-returns", "1.5"),
+                       ("--links", "0.1,0.4"), ("--links", "0.1,0,0.4"),
+                       ("--links", "0.1, 0.4,0.5"), ("--link-radius", "0.6"),
+                       ("--link-radius", "0.02,0.02"),
+                       ("--link-radius", "0.02,0.02,0.02,"),
+                       ("--limits-deg", "-180,180,-40,180,-180"),
+                       ("--limits-deg", "-180,180,40,-40,-180,140"),
+                       ("--limits-deg", "-180,180,-40,181,-180,140"),
+                       ("--limits-deg", "-180,180,-40,nan,-180,140")):
         r = subprocess.run([DAEMON, key, value, "--help"], capture_output=True,
                            text=True)
         assert r.returncode == 2 and key[2:] + ":" in r.stderr, (key, r.stderr)
