@@ -2,6 +2,7 @@
  * logic is drive.c (portable); this file is the board: options, the
  * SocketCAN driver, the 1 ms loop, and faults injected on schedule. */
 #define _POSIX_C_SOURCE 200809L
+#include <ctype.h>
 #include <errno.h>
 #include <math.h>
 #include <signal.h>
@@ -39,7 +40,9 @@ static void usage(FILE *out)
         "  --iface NAME          CAN interface (default vcan0)\n"
         "  --nodes A,B,...       node ids, up to 8 (default 1,2,3: joints\n"
         "                        alpha, sigma, eta)\n"
-        "  --counts-per-deg X    scale behind the default position limits\n"
+        "  --counts-per-deg X[,Y,Z]  scale behind the default position limits\n"
+        "                        and --start-deg, one for every joint or one\n"
+        "                        each (the drives past the third take Z)\n"
         "                        (default 1000; limits are design.md's joint\n"
         "                        limits [-40,180] and [-180,140] deg for "
         "sigma\n"
@@ -102,6 +105,38 @@ static int is_simulated(const unsigned *nodes, unsigned n_nodes, long id)
     return 0;
 }
 
+/* "X" for every joint or "X,Y,Z" one each, each in (0, 1e6): the scale
+ * behind the default limits and the start positions */
+static int parse_counts_per_deg(const char *s, double *cpd)
+{
+    int n = 0;
+    for (;;) {
+        char *end;
+        if (n == 3 || *s == 0 || isspace((unsigned char)*s)) {
+            return -1; /* strtod would skip a space */
+        }
+        cpd[n] = strtod(s, &end);
+        if (end == s || !(cpd[n] > 0 && cpd[n] < 1e6)) {
+            return -1;
+        }
+        n++;
+        if (*end == 0) {
+            break;
+        }
+        if (*end != ',') {
+            return -1;
+        }
+        s = end + 1;
+    }
+    if (n == 2) {
+        return -1;
+    }
+    if (n == 1) {
+        cpd[1] = cpd[2] = cpd[0];
+    }
+    return 0;
+}
+
 static int parse_seconds(const char *s, double *out)
 {
     char *end;
@@ -127,7 +162,8 @@ int main(int argc, char **argv)
     static const double lim_deg[3][2] = {{-180, 180}, {-40, 180}, {-180, 140}};
     double start_deg[3] = {0, 0, 0};
     const char *iface = "vcan0";
-    double counts_per_deg = 1000, fault_at = -1, mute_at = 0, duration = 0;
+    double counts_per_deg[3] = {1000, 1000, 1000}, fault_at = -1, mute_at = 0,
+           duration = 0;
     long servo_error = 0, heartbeat_ms = 100, watchdog_ms = 500, master = 0;
     long fault_node = 0, fault_code = QRTCAN_EMCY_OVERCURRENT, mute_node = 0;
     long lim_id[MAX_DRIVES];
@@ -160,9 +196,7 @@ int main(int argc, char **argv)
         } else if (strcmp(o, "--nodes") == 0) {
             bad = qrtcan_parse_node_list(v, nodes, MAX_DRIVES, &n_nodes) != 0;
         } else if (strcmp(o, "--counts-per-deg") == 0) {
-            char *end;
-            counts_per_deg = strtod(v, &end);
-            bad = *end != 0 || !(counts_per_deg > 0 && counts_per_deg < 1e6);
+            bad = parse_counts_per_deg(v, counts_per_deg);
         } else if (strcmp(o, "--start-deg") == 0) {
             char extra;
             bad = sscanf(v, "%lf,%lf,%lf%c", &start_deg[0], &start_deg[1],
@@ -230,11 +264,11 @@ int main(int argc, char **argv)
     }
     /* the power-up positions in counts must fit 0x6064's INTEGER32 */
     for (i = 0; i < 3; i++) {
-        if (!(fabs(start_deg[i] * counts_per_deg) < 2.0e9)) {
+        if (!(fabs(start_deg[i] * counts_per_deg[i]) < 2.0e9)) {
             fprintf(stderr,
                     "servo_sim: --start-deg %g times --counts-per-deg %g is "
                     "beyond a 32-bit position\n",
-                    start_deg[i], counts_per_deg);
+                    start_deg[i], counts_per_deg[i]);
             return 2;
         }
     }
@@ -247,14 +281,14 @@ int main(int argc, char **argv)
         unsigned j, k = i < 3 ? i : 2;
         memset(&cfg[i], 0, sizeof cfg[i]);
         cfg[i].node = nodes[i];
-        cfg[i].limit_min = (int32_t)(lim_deg[k][0] * counts_per_deg);
-        cfg[i].limit_max = (int32_t)(lim_deg[k][1] * counts_per_deg);
+        cfg[i].limit_min = (int32_t)(lim_deg[k][0] * counts_per_deg[k]);
+        cfg[i].limit_max = (int32_t)(lim_deg[k][1] * counts_per_deg[k]);
         if (k == 0) { /* alpha wraps (design.md section 3): no end stops */
             cfg[i].limit_min = INT32_MIN;
             cfg[i].limit_max = INT32_MAX;
         }
         if (i < 3) {
-            double c = start_deg[i] * counts_per_deg;
+            double c = start_deg[i] * counts_per_deg[i];
             cfg[i].start_position = (int32_t)(c < 0 ? c - 0.5 : c + 0.5);
         }
         for (j = 0; j < n_lim; j++) {

@@ -44,6 +44,29 @@ bool parse_numbers(const std::string &text, double *out, int n)
     return true;
 }
 
+bool parse_per_joint(const std::string &text, double out[3])
+{
+    if (text.find(',') != std::string::npos)
+        return parse_numbers(text, out, 3);
+    if (!parse_numbers(text, out, 1))
+        return false;
+    out[1] = out[2] = out[0];
+    return true;
+}
+
+const char *const kCountsPerDegWanted =
+    "non-zero counts per degree within 1e7, one for every joint or three";
+
+bool parse_counts_per_deg(const std::string &text, double out[3])
+{
+    if (!parse_per_joint(text, out))
+        return false;
+    for (int j = 0; j < 3; j++)
+        if (!(out[j] != 0.0 && std::fabs(out[j]) <= 1e7))
+            return false;
+    return true;
+}
+
 bool parse_limits_deg(const std::string &text, double lim[3][2])
 {
     double v[6];

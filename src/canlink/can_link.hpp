@@ -47,6 +47,16 @@ bool parse_node_ids(const std::string &text, unsigned ids[3]);
 // nothing empty). False, with out partly written, for anything else.
 bool parse_numbers(const std::string &text, double *out, int n);
 
+// "x" for all three joints (or links), or "x,y,z" one each: as the
+// per-joint options of qrtpland and qrtplan-exec take them.
+bool parse_per_joint(const std::string &text, double out[3]);
+
+// Drive counts per joint degree, parse_per_joint's way: each non-zero (its
+// sign the drive's direction) and within 1e7 in size. The error text is
+// kCountsPerDegWanted.
+bool parse_counts_per_deg(const std::string &text, double out[3]);
+extern const char *const kCountsPerDegWanted;
+
 // "a0,a1,s0,s1,e0,e1": the joint limits in degrees, as the daemon's
 // --limits-deg and qrtplan-exec's take them: each low below its high, all
 // within [-180, 180] (what the master takes). False for anything else, with

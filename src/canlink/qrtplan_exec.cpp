@@ -39,7 +39,8 @@ const char *kUsage =
     "\n"
     "  --can IFACE          SocketCAN interface (e.g. vcan0, can0)\n"
     "  --nodes A,B,C        drive node ids of alpha, sigma, eta (1,2,3)\n"
-    "  --counts-per-deg X   drive counts per joint degree, all joints (1000)\n"
+    "  --counts-per-deg X[,Y,Z]  drive counts per joint degree: one for\n"
+    "                       every joint, or one each (1000)\n"
     "  --speed DEG_S        top joint speed (30); --accel DEG_S2 (60)\n"
     "  --timeout S          give up after S seconds (120)\n"
     "  --limits-deg a0,a1,s0,s1,e0,e1  this arm's joint limits; a plan\n"
@@ -154,10 +155,12 @@ int main(int argc, char **argv)
             for (int j = 0; j < 3; j++)
                 cfg.node[j] = n[j];
         } else if (a == "--counts-per-deg") {
-            if (!parse_double(value(a.c_str()), &v) || v == 0)
-                return fail_input("--counts-per-deg wants a non-zero number");
-            for (auto &s : cfg.scale)
-                s.counts_per_deg = v;
+            double c[3];
+            if (!qrt::parse_counts_per_deg(value(a.c_str()), c))
+                return fail_input(std::string("--counts-per-deg wants ") +
+                                  qrt::kCountsPerDegWanted);
+            for (int j = 0; j < 3; j++)
+                cfg.scale[j].counts_per_deg = c[j];
         } else if (a == "--speed" || a == "--accel") {
             if (!parse_double(value(a.c_str()), &v) || v <= 0)
                 return fail_input(a + " wants a positive number");

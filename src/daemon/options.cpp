@@ -55,7 +55,8 @@ const char *kUsage =
     "  --dijkstra               plain Dijkstra instead of A* (same cost)\n"
     "  --can IFACE              drive the arm on SocketCAN IFACE (off)\n"
     "  --can-nodes A,B,C        drive node ids of alpha, sigma, eta (1,2,3)\n"
-    "  --counts-per-deg X       drive counts per degree (1000)\n"
+    "  --counts-per-deg X[,Y,Z] drive counts per joint degree: one for\n"
+    "                           every joint, or one each (1000)\n"
     "  --speed DEG_S            top joint speed (30)\n"
     "  --accel DEG_S2           joint acceleration (60)\n"
     "  --heartbeat-timeout MS   a drive silent this long is lost (300)\n"
@@ -146,14 +147,12 @@ bool apply(Options *o, const std::string &key, const std::string &value,
         o->params.grid_deg = v;
     } else if (key == "link-radius") {
         double r[3];
-        bool one = value.find(',') == std::string::npos;
-        if (!(one ? parse_numbers(value, r, 1) : parse_numbers(value, r, 3)))
+        if (!parse_per_joint(value, r) ||
+            !(r[0] >= 0.001 && r[0] <= 0.5 && r[1] >= 0.001 && r[1] <= 0.5 &&
+              r[2] >= 0.001 && r[2] <= 0.5))
             return bad("metres in 0.001..0.5, one for every link or three");
-        for (int j = 0; j < 3; j++) {
-            if (!(r[one ? 0 : j] >= 0.001 && r[one ? 0 : j] <= 0.5))
-                return bad("metres in 0.001..0.5, one for every link or three");
-            o->params.arm.link_radius_m[j] = r[one ? 0 : j];
-        }
+        for (int j = 0; j < 3; j++)
+            o->params.arm.link_radius_m[j] = r[j];
     } else if (key == "links") {
         double l[3];
         if (!parse_numbers(value, l, 3) ||
@@ -177,10 +176,11 @@ bool apply(Options *o, const std::string &key, const std::string &value,
         for (int j = 0; j < 3; j++)
             o->can.node[j] = n[j];
     } else if (key == "counts-per-deg") {
-        if (!number(-1e7, 1e7) || v == 0)
-            return bad("a non-zero number");
-        for (auto &s : o->can.scale)
-            s.counts_per_deg = v;
+        double c[3];
+        if (!parse_counts_per_deg(value, c))
+            return bad(kCountsPerDegWanted);
+        for (int j = 0; j < 3; j++)
+            o->can.scale[j].counts_per_deg = c[j];
     } else if (key == "speed" || key == "accel") {
         if (!number(1e-3, 1e4))
             return bad("a positive number");

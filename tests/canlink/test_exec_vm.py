@@ -15,7 +15,10 @@ host's kernel has no CAN). On vcan0:
   3. The interface goes down in the middle of a move and comes back: the
      master reports the bus, nothing crashes; then a new plan from where the
      arm stopped executes to the goal (recovery).
-  4. Every frame of every capture decodes with can/qrtplan.dbc (cantools).
+  4. Drives with their own counts per degree each (--counts-per-deg X,Y,Z
+     on servo_sim and qrtplan-exec): the arm is read where it stands and a
+     plan from there executes to its goal.
+  5. Every frame of every capture decodes with can/qrtplan.dbc (cantools).
 """
 import argparse
 import csv
@@ -291,6 +294,53 @@ def scenario_unplug(args):
     decodes(args, bus.capture)
 
 
+def scenario_scales(args):
+    """Drives geared differently on each joint (1000, 2000 and 500 counts a
+    degree): read with one scale for all, the sigma and eta the drives power
+    up at are 20 and -10, not 10 and -20; with the drives' own scales the
+    arm is where it stands and a plan from there reaches its goal."""
+    scales = "1000,2000,500"
+    bus = Bus(args, "scales", ["--start-deg", "-100,10,-20",
+                               "--counts-per-deg", scales])
+    try:
+        here = {}
+        for given in ("1000", scales):
+            r = subprocess.run([args.exec, "--can", "vcan0", "--where",
+                                "--counts-per-deg", given,
+                                "--heartbeat-timeout", "1500"],
+                               capture_output=True, text=True, timeout=60)
+            check(r.returncode == 0, f"--where --counts-per-deg {given}: "
+                  f"{r.stderr.strip()}")
+            here[given] = json.loads(r.stdout) if r.returncode == 0 else None
+        check(here["1000"] is not None and
+              np.allclose(here["1000"], [-100, 20, -10], atol=0.02),
+              f"one scale for all reads {here['1000']}: the test can fail")
+        check(here[scales] is not None and
+              np.allclose(here[scales], [-100, 10, -20], atol=0.02),
+              f"each joint's own scale reads {here[scales]}")
+        scene = {"version": 1, "points": [[0.0, 0.9, 0.5]],
+                 "start": {"joints_deg": [-100, 10, -20]},
+                 "goal": {"joints_deg": [-60, 40, -50]}}
+        scene_path = os.path.join(args.out, "scales.scene.json")
+        with open(scene_path, "w") as f:
+            json.dump(scene, f)
+        plan_path = os.path.join(args.out, "scales.plan.json")
+        p = plan(args, scene_path, plan_path)
+        trace = os.path.join(args.out, "scales.trace.csv")
+        proc = execute(args, plan_path, trace,
+                       extra=("--counts-per-deg", scales))
+        out, err = proc.communicate(timeout=120)
+        print(out + err, flush=True)
+        check(proc.returncode == 0, f"qrtplan-exec with per-joint scales: "
+              f"exit {proc.returncode}")
+        q, _ = read_trace(trace)
+        end = q[-1] - np.asarray(p["waypoints_deg"][-1], float)
+        check(float(np.abs(end).max()) < 0.02,
+              f"ends at the goal: {q[-1].tolist()}")
+    finally:
+        bus.close()
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--servo-sim", required=True)
@@ -301,7 +351,8 @@ def main():
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     t0 = time.monotonic()
-    for scenario in (scenario_table4, scenario_fault, scenario_unplug):
+    for scenario in (scenario_table4, scenario_fault, scenario_unplug,
+                     scenario_scales):
         print(f"== {scenario.__name__}", flush=True)
         try:
             scenario(args)

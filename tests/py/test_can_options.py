@@ -45,6 +45,15 @@ def run_sim(args):
      "beyond a 32-bit position"),
     (["--start-deg", "nan,0,0"], "bad value for --start-deg"),
     (["--counts-per-deg", "inf"], "bad value for --counts-per-deg"),
+    (["--counts-per-deg", "1000,2000"], "bad value for --counts-per-deg"),
+    (["--counts-per-deg", "1000,2000,500,1"], "bad value for --counts-per-deg"),
+    (["--counts-per-deg", "1000,,500"], "bad value for --counts-per-deg"),
+    (["--counts-per-deg", "1000, 2000,500"], "bad value for --counts-per-deg"),
+    (["--counts-per-deg", "1000,0,500"], "bad value for --counts-per-deg"),
+    (["--counts-per-deg", "1000x"], "bad value for --counts-per-deg"),
+    # per joint: 30000 deg at 100000 counts a degree is sigma's alone
+    (["--start-deg", "0,30000,0", "--counts-per-deg", "1000,100000,1000"],
+     "--start-deg 30000 times --counts-per-deg 100000"),
 ])
 def test_refused_before_the_bus_opens(args, words):
     r = run_sim(args)
@@ -170,3 +179,32 @@ def test_exec_checks_the_plan_against_the_arms_limits(tmp_path, limits,
 def test_exec_refuses_bad_limits(tmp_path, limits):
     r = run_exec_with_limits(tmp_path, limits, "[[0, 0, 0]]")
     assert r.returncode == 2 and "--limits-deg wants six numbers" in r.stderr
+
+
+def test_per_joint_counts_reach_the_bus():
+    """One scale each: the start check takes each joint's own (sigma 30000
+    deg at 1000 counts is in range), so the simulator gets to the bus."""
+    r = run_sim(["--start-deg", "0,30000,0", "--counts-per-deg",
+                 "100000,1000,100000"])
+    assert r.returncode == 1, r.stderr
+    assert "qrt_no_such_bus" in r.stderr or "socket" in r.stderr
+
+
+@pytest.mark.parametrize("value", ["1000,2000", "0", "1000,0,1", "1e8",
+                                   "1000,-2e7,1", "nan", "1000, 2000,500", ""])
+def test_bad_counts_per_deg_refused_by_the_daemon_and_exec(tmp_path, value):
+    plan = tmp_path / "p.json"
+    plan.write_text('{"status": "ok", "waypoints_deg": [[0, 0, 0], [5, 0, 0]]}')
+    r = subprocess.run([str(EXEC), "--counts-per-deg", value, "--can",
+                        "qrt_no_such_bus", str(plan)], capture_output=True,
+                       text=True, timeout=30)
+    assert r.returncode == 2 and "--counts-per-deg wants non-zero" in r.stderr
+    r = subprocess.run([str(DAEMON), "--counts-per-deg", value, "--help"],
+                       capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2 and "counts-per-deg: non-zero" in r.stderr
+
+
+def test_per_joint_counts_accepted_by_the_daemon():
+    r = subprocess.run([str(DAEMON), "--counts-per-deg", "1000,-2000,500",
+                        "--help"], capture_output=True, text=True, timeout=30)
+    assert r.returncode == 0, r.stderr
