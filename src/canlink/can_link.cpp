@@ -67,6 +67,19 @@ bool parse_counts_per_deg(const std::string &text, double out[3])
     return true;
 }
 
+const char *const kMotionWanted =
+    "0.001..10000 degrees a second (squared), one for every joint or three";
+
+bool parse_speed_or_accel(const std::string &text, double out[3])
+{
+    if (!parse_per_joint(text, out))
+        return false;
+    for (int j = 0; j < 3; j++)
+        if (!(out[j] >= 1e-3 && out[j] <= 1e4))
+            return false;
+    return true;
+}
+
 bool parse_limits_deg(const std::string &text, double lim[3][2])
 {
     double v[6];

@@ -57,6 +57,11 @@ bool parse_per_joint(const std::string &text, double out[3]);
 bool parse_counts_per_deg(const std::string &text, double out[3]);
 extern const char *const kCountsPerDegWanted;
 
+// Top joint speeds (deg/s) or accelerations (deg/s^2), parse_per_joint's
+// way: each in 0.001..10000. The error text is kMotionWanted.
+bool parse_speed_or_accel(const std::string &text, double out[3]);
+extern const char *const kMotionWanted;
+
 // "a0,a1,s0,s1,e0,e1": the joint limits in degrees, as the daemon's
 // --limits-deg and qrtplan-exec's take them: each low below its high, all
 // within [-180, 180] (what the master takes). False for anything else, with

@@ -41,7 +41,8 @@ const char *kUsage =
     "  --nodes A,B,C        drive node ids of alpha, sigma, eta (1,2,3)\n"
     "  --counts-per-deg X[,Y,Z]  drive counts per joint degree: one for\n"
     "                       every joint, or one each (1000)\n"
-    "  --speed DEG_S        top joint speed (30); --accel DEG_S2 (60)\n"
+    "  --speed DEG_S        top joint speed (30); --accel DEG_S2 (60);\n"
+    "                       one for every joint, or one each (X,Y,Z)\n"
     "  --timeout S          give up after S seconds (120)\n"
     "  --limits-deg a0,a1,s0,s1,e0,e1  this arm's joint limits; a plan\n"
     "                       with a waypoint outside them is refused\n"
@@ -162,11 +163,12 @@ int main(int argc, char **argv)
             for (int j = 0; j < 3; j++)
                 cfg.scale[j].counts_per_deg = c[j];
         } else if (a == "--speed" || a == "--accel") {
-            if (!parse_double(value(a.c_str()), &v) || v <= 0)
-                return fail_input(a + " wants a positive number");
+            double m[3];
+            if (!qrt::parse_speed_or_accel(value(a.c_str()), m))
+                return fail_input(a + " wants " + qrt::kMotionWanted);
             for (int j = 0; j < 3; j++)
                 (a == "--speed" ? cfg.max_speed_deg_s
-                                : cfg.max_accel_deg_s2)[j] = v;
+                                : cfg.max_accel_deg_s2)[j] = m[j];
         } else if (a == "--limits-deg") {
             if (!qrt::parse_limits_deg(value(a.c_str()), cfg.limit_deg))
                 return fail_input("--limits-deg wants six numbers "

@@ -57,8 +57,9 @@ const char *kUsage =
     "  --can-nodes A,B,C        drive node ids of alpha, sigma, eta (1,2,3)\n"
     "  --counts-per-deg X[,Y,Z] drive counts per joint degree: one for\n"
     "                           every joint, or one each (1000)\n"
-    "  --speed DEG_S            top joint speed (30)\n"
-    "  --accel DEG_S2           joint acceleration (60)\n"
+    "  --speed DEG_S[,S2,S3]    top joint speed (30)\n"
+    "  --accel DEG_S2[,A2,A3]   joint acceleration (60); each one for\n"
+    "                           every joint, or one each\n"
     "  --heartbeat-timeout MS   a drive silent this long is lost (300)\n"
     "  --sdo-timeout MS         one SDO attempt of three (50)\n"
     "  --log-level LEVEL        error, warn, info or debug (info)\n"
@@ -182,11 +183,12 @@ bool apply(Options *o, const std::string &key, const std::string &value,
         for (int j = 0; j < 3; j++)
             o->can.scale[j].counts_per_deg = c[j];
     } else if (key == "speed" || key == "accel") {
-        if (!number(1e-3, 1e4))
-            return bad("a positive number");
+        double m[3];
+        if (!parse_speed_or_accel(value, m))
+            return bad(kMotionWanted);
         for (int j = 0; j < 3; j++)
             (key == "speed" ? o->can.max_speed_deg_s
-                            : o->can.max_accel_deg_s2)[j] = v;
+                            : o->can.max_accel_deg_s2)[j] = m[j];
     } else if (key == "heartbeat-timeout") {
         if (!number(20, 60000))
             return bad("milliseconds in 20..60000");

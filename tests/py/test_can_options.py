@@ -208,3 +208,32 @@ def test_per_joint_counts_accepted_by_the_daemon():
     r = subprocess.run([str(DAEMON), "--counts-per-deg", "1000,-2000,500",
                         "--help"], capture_output=True, text=True, timeout=30)
     assert r.returncode == 0, r.stderr
+
+
+@pytest.mark.parametrize("option", ["--speed", "--accel"])
+@pytest.mark.parametrize("value", ["30,60", "0", "30,0,30", "1e5", "-30",
+                                   "nan", "30,60,90,1", "30,,30"])
+def test_bad_speed_or_accel_refused_by_the_daemon_and_exec(tmp_path, option,
+                                                           value):
+    plan = tmp_path / "p.json"
+    plan.write_text('{"status": "ok", "waypoints_deg": [[0, 0, 0], [5, 0, 0]]}')
+    r = subprocess.run([str(EXEC), option, value, "--can", "qrt_no_such_bus",
+                        str(plan)], capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2 and option + " wants 0.001..10000" in r.stderr
+    r = subprocess.run([str(DAEMON), option, value, "--help"],
+                       capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2 and option[2:] + ": 0.001..10000" in r.stderr
+
+
+def test_per_joint_speed_and_accel_accepted(tmp_path):
+    r = subprocess.run([str(DAEMON), "--speed", "40,10,20", "--accel",
+                        "80,20,40", "--help"], capture_output=True, text=True,
+                       timeout=30)
+    assert r.returncode == 0, r.stderr
+    plan = tmp_path / "p.json"
+    plan.write_text('{"status": "ok", "waypoints_deg": [[0, 0, 0], [5, 0, 0]]}')
+    r = subprocess.run([str(EXEC), "--speed", "40,10,20", "--accel",
+                        "80,20,40", "--can", "qrt_no_such_bus", "--timeout",
+                        "5", str(plan)], capture_output=True, text=True,
+                       timeout=30)
+    assert r.returncode != 2 and "qrt_no_such_bus" in r.stderr, r.stderr
