@@ -54,17 +54,24 @@ bool parse_per_joint(const std::string &text, double out[3])
     return true;
 }
 
+bool all_within(const double x[3], double lo, double hi)
+{
+    return x[0] >= lo && x[0] <= hi && x[1] >= lo && x[1] <= hi && x[2] >= lo &&
+           x[2] <= hi;
+}
+
 const char *const kCountsPerDegWanted =
-    "non-zero counts per degree within 1e7, one for every joint or three";
+    "non-zero counts per degree, 1e-6..1e7 in size, one for every joint or "
+    "three";
 
 bool parse_counts_per_deg(const std::string &text, double out[3])
 {
+    double size[3];
     if (!parse_per_joint(text, out))
         return false;
     for (int j = 0; j < 3; j++)
-        if (!(out[j] != 0.0 && std::fabs(out[j]) <= 1e7))
-            return false;
-    return true;
+        size[j] = std::fabs(out[j]);
+    return all_within(size, 1e-6, 1e7); // the sign is the drive's direction
 }
 
 const char *const kMotionWanted =
@@ -72,12 +79,7 @@ const char *const kMotionWanted =
 
 bool parse_speed_or_accel(const std::string &text, double out[3])
 {
-    if (!parse_per_joint(text, out))
-        return false;
-    for (int j = 0; j < 3; j++)
-        if (!(out[j] >= 1e-3 && out[j] <= 1e4))
-            return false;
-    return true;
+    return parse_per_joint(text, out) && all_within(out, 1e-3, 1e4);
 }
 
 bool parse_limits_deg(const std::string &text, double lim[3][2])

@@ -51,8 +51,11 @@ bool parse_numbers(const std::string &text, double *out, int n);
 // per-joint options of qrtpland and qrtplan-exec take them.
 bool parse_per_joint(const std::string &text, double out[3]);
 
-// Drive counts per joint degree, parse_per_joint's way: each non-zero (its
-// sign the drive's direction) and within 1e7 in size. The error text is
+// Whether each of x[0..2] is in [lo, hi] (false for NaN).
+bool all_within(const double x[3], double lo, double hi);
+
+// Drive counts per joint degree, parse_per_joint's way: each 1e-6..1e7 in
+// size, its sign the drive's direction. The error text is
 // kCountsPerDegWanted.
 bool parse_counts_per_deg(const std::string &text, double out[3]);
 extern const char *const kCountsPerDegWanted;

@@ -92,6 +92,12 @@ bool channel_name_ok(const std::string &s)
     return true;
 }
 
+bool all_within(const double x[3], double lo, double hi)
+{
+    return x[0] >= lo && x[0] <= hi && x[1] >= lo && x[1] <= hi && x[2] >= lo &&
+           x[2] <= hi;
+}
+
 // One setting; false with *error set if the key or value is bad.
 bool apply(Options *o, const std::string &key, const std::string &value,
            std::string *error)
@@ -148,17 +154,13 @@ bool apply(Options *o, const std::string &key, const std::string &value,
         o->params.grid_deg = v;
     } else if (key == "link-radius") {
         double r[3];
-        if (!parse_per_joint(value, r) ||
-            !(r[0] >= 0.001 && r[0] <= 0.5 && r[1] >= 0.001 && r[1] <= 0.5 &&
-              r[2] >= 0.001 && r[2] <= 0.5))
+        if (!parse_per_joint(value, r) || !all_within(r, 0.001, 0.5))
             return bad("metres in 0.001..0.5, one for every link or three");
         for (int j = 0; j < 3; j++)
             o->params.arm.link_radius_m[j] = r[j];
     } else if (key == "links") {
         double l[3];
-        if (!parse_numbers(value, l, 3) ||
-            !(l[0] >= 0.001 && l[0] <= 10 && l[1] >= 0.001 && l[1] <= 10 &&
-              l[2] >= 0.001 && l[2] <= 10))
+        if (!parse_numbers(value, l, 3) || !all_within(l, 0.001, 10))
             return bad("three lengths L1,L2,L3 in metres, each in 0.001..10");
         for (int j = 0; j < 3; j++)
             o->params.arm.link_m[j] = l[j];
