@@ -681,7 +681,27 @@ int Daemon::run(const std::atomic<bool> &stop)
         log(LogLevel::error, "planner settings refused: %s", qrt_err_name(rc));
         return 2;
     }
+    // what the daemon made of its options and config file, for whoever
+    // has to tell why the arm moves as it does
+    const qrt_arm &arm = opts_.params.arm;
+    log(LogLevel::info,
+        "arm: links %g,%g,%g m, radii %g,%g,%g m, limits %g..%g %g..%g "
+        "%g..%g deg; grid %g deg, margin %g m, C-space margin %g deg",
+        arm.link_m[0], arm.link_m[1], arm.link_m[2], arm.link_radius_m[0],
+        arm.link_radius_m[1], arm.link_radius_m[2], arm.limit_deg[0][0],
+        arm.limit_deg[0][1], arm.limit_deg[1][0], arm.limit_deg[1][1],
+        arm.limit_deg[2][0], arm.limit_deg[2][1], opts_.params.grid_deg,
+        opts_.params.margin_m, opts_.params.cspace_margin_deg);
     if (!opts_.can_iface.empty()) {
+        const qrtcan_master_config &c = opts_.can;
+        log(LogLevel::info,
+            "CAN %s: nodes %u,%u,%u, counts/deg %g,%g,%g, speed %g,%g,%g "
+            "deg/s, accel %g,%g,%g deg/s^2",
+            opts_.can_iface.c_str(), c.node[0], c.node[1], c.node[2],
+            c.scale[0].counts_per_deg, c.scale[1].counts_per_deg,
+            c.scale[2].counts_per_deg, c.max_speed_deg_s[0],
+            c.max_speed_deg_s[1], c.max_speed_deg_s[2], c.max_accel_deg_s2[0],
+            c.max_accel_deg_s2[1], c.max_accel_deg_s2[2]);
         can_.reset(new CanLink(opts_.can_iface, opts_.can));
         std::string why;
         if (!can_->start(&why)) {

@@ -151,6 +151,22 @@ def test_each_links_radius_from_the_options(daemon):
         assert p.status == status, (radii, p.status, p.detail)
 
 
+def test_the_log_says_what_the_daemon_made_of_its_options(daemon):
+    """Per-joint values reach the arm and the drives' settings one by one
+    (no bus here: the daemon reports it and retries; its log still shows
+    what it would drive with)."""
+    d, c = daemon("--links", "0.1,0.4,0.45", "--link-radius", "0.03,0.025,0.02",
+                  "--limits-deg", "-180,180,-10,170,-150,130",
+                  "--can", "qrt_no_such_bus", "--can-nodes", "4,5,6",
+                  "--counts-per-deg", "1000,2000,-500", "--speed", "40,10,20",
+                  "--accel", "80,20,40")
+    text = d.text()
+    assert ("arm: links 0.1,0.4,0.45 m, radii 0.03,0.025,0.02 m, limits "
+            "-180..180 -10..170 -150..130 deg") in text, text
+    assert ("CAN qrt_no_such_bus: nodes 4,5,6, counts/deg 1000,2000,-500, "
+            "speed 40,10,20 deg/s, accel 80,20,40 deg/s^2") in text, text
+
+
 def test_bad_messages_get_a_status_and_the_daemon_keeps_serving(daemon):
     d, c = daemon()
     good = scan_from_points([[0.5, 0.5, 0.5]])
