@@ -2,7 +2,8 @@
 # Every test of the project, as `make test` and CI run them:
 #   1. the release build's CTest suite (C unit tests, Python tests, the
 #      daemon over LCM, the CAN tests on vcan0 in a VM),
-#   2. the same suite built with AddressSanitizer and UBSan,
+#   2. the same suite built with AddressSanitizer and UBSan, and the tests
+#      that run threads built with ThreadSanitizer,
 #   3. the core's C tests cross-built for armhf and aarch64, run under
 #      qemu-user, with the paper's scenes planned exactly as on the host,
 #   4. the core cross-built for a Cortex-M7, and bare-metal Cortex-M7 images
@@ -30,7 +31,7 @@ run_suite() { # name builddir cmake-args...
         failed=$((failed + 1))
         return
     fi
-    out=$(cd "$dir" && ctest --output-on-failure -j "$jobs" 2>&1)
+    out=$(cd "$dir" && ctest --output-on-failure -j "$jobs" ${ctest_args:-} 2>&1)
     echo "$out" | grep -E "Test +#|tests passed|Failed|FAIL|Error" | tail -40
     local total fails
     total=$(echo "$out" | sed -n 's/.*tests passed, [0-9]* tests failed out of \([0-9]*\).*/\1/p')
@@ -48,6 +49,26 @@ run_suite "release build" build -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQRT_PYTHON_T
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
     run_suite "ASan + UBSan build" build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DQRT_SANITIZE=ON -DQRT_PYTHON_TESTS=ON
+
+# The tests that run threads (the daemon's planner, clock, guard and CAN link
+# threads; the two-thread mask; qrtplan-exec's CAN link), built with
+# ThreadSanitizer. A race is logged, not fatal, so that every test runs; any
+# log fails the step.
+tsan_logs="$PWD/build-tsan/races"
+rm -rf "$tsan_logs"
+mkdir -p "$tsan_logs"
+TSAN_OPTIONS="halt_on_error=0 log_path=$tsan_logs/race" \
+    ctest_args="-R ^(test_mask_threads|daemon_tests|daemon_can_vm|can_exec_vm|canopen_drive_vm)$" \
+    run_suite "ThreadSanitizer build (the tests that run threads)" build-tsan \
+    -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQRT_TSAN=ON -DQRT_PYTHON_TESTS=ON
+if ls "$tsan_logs"/race* >/dev/null 2>&1; then
+    head -80 "$tsan_logs"/race*
+    echo "ThreadSanitizer: data races reported (build-tsan/races/)"
+    failed=$((failed + 1))
+else
+    echo "ThreadSanitizer: no data race reported"
+    passed=$((passed + 1))
+fi
 
 # The core and its C tests on ARM Linux, under qemu-user, and the plans of
 # the paper's scenes compared with the host build's.

@@ -173,7 +173,8 @@ trap 'rm -rf "$run"' EXIT
     echo "#!/bin/sh"
     echo "cd $(printf %q "$PWD")"
     printf 'export PATH=%q\n' "$PATH"
-    for v in HOME QRT_TEST_SCALE QRT_SEED VIRTUAL_ENV PYTHONPATH; do
+    for v in HOME QRT_TEST_SCALE QRT_SEED VIRTUAL_ENV PYTHONPATH \
+        ASAN_OPTIONS UBSAN_OPTIONS TSAN_OPTIONS; do
         [ -n "${!v:-}" ] && printf 'export %s=%q\n' "$v" "${!v}"
     done
     printf '%q ' "$@"
