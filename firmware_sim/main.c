@@ -48,6 +48,10 @@ static void usage(FILE *out)
         "sigma\n"
         "                        and eta; alpha wraps, so its drive turns\n"
         "                        without a limit)\n"
+        "  --offset-counts A[,B,C]  each drive's counts at its joint's 0\n"
+        "                        degrees, one for every joint or one each\n"
+        "                        (default 0; past the third, C): for\n"
+        "                        --start-deg and the default limits\n"
         "  --start-deg A,S,E     the first three drives' positions at "
         "power-up,\n"
         "                        in degrees (default 0,0,0)\n"
@@ -105,9 +109,8 @@ static int is_simulated(const unsigned *nodes, unsigned n_nodes, long id)
     return 0;
 }
 
-/* "X" for every joint or "X,Y,Z" one each, each in (0, 1e6): the scale
- * behind the default limits and the start positions */
-static int parse_counts_per_deg(const char *s, double *cpd)
+/* "X" for every joint or "X,Y,Z" one each, each in [lo, hi] */
+static int parse_per_joint(const char *s, double lo, double hi, double *out)
 {
     int n = 0;
     for (;;) {
@@ -115,8 +118,8 @@ static int parse_counts_per_deg(const char *s, double *cpd)
         if (n == 3 || *s == 0 || isspace((unsigned char)*s)) {
             return -1; /* strtod would skip a space */
         }
-        cpd[n] = strtod(s, &end);
-        if (end == s || !(cpd[n] > 0 && cpd[n] < 1e6)) {
+        out[n] = strtod(s, &end);
+        if (end == s || !(out[n] >= lo && out[n] <= hi)) {
             return -1;
         }
         n++;
@@ -132,7 +135,7 @@ static int parse_counts_per_deg(const char *s, double *cpd)
         return -1;
     }
     if (n == 1) {
-        cpd[1] = cpd[2] = cpd[0];
+        out[1] = out[2] = out[0];
     }
     return 0;
 }
@@ -162,8 +165,8 @@ int main(int argc, char **argv)
     static const double lim_deg[3][2] = {{-180, 180}, {-40, 180}, {-180, 140}};
     double start_deg[3] = {0, 0, 0};
     const char *iface = "vcan0";
-    double counts_per_deg[3] = {1000, 1000, 1000}, fault_at = -1, mute_at = 0,
-           duration = 0;
+    double counts_per_deg[3] = {1000, 1000, 1000}, offset_counts[3] = {0, 0, 0};
+    double fault_at = -1, mute_at = 0, duration = 0;
     long servo_error = 0, heartbeat_ms = 100, watchdog_ms = 500, master = 0;
     long fault_node = 0, fault_code = QRTCAN_EMCY_OVERCURRENT, mute_node = 0;
     long lim_id[MAX_DRIVES];
@@ -196,7 +199,12 @@ int main(int argc, char **argv)
         } else if (strcmp(o, "--nodes") == 0) {
             bad = qrtcan_parse_node_list(v, nodes, MAX_DRIVES, &n_nodes) != 0;
         } else if (strcmp(o, "--counts-per-deg") == 0) {
-            bad = parse_counts_per_deg(v, counts_per_deg);
+            bad = parse_per_joint(v, 1e-6, 999999.0, counts_per_deg);
+        } else if (strcmp(o, "--offset-counts") == 0) {
+            bad = parse_per_joint(v, -1e9, 1e9, offset_counts) ||
+                  offset_counts[0] != floor(offset_counts[0]) ||
+                  offset_counts[1] != floor(offset_counts[1]) ||
+                  offset_counts[2] != floor(offset_counts[2]);
         } else if (strcmp(o, "--start-deg") == 0) {
             char extra;
             bad = sscanf(v, "%lf,%lf,%lf%c", &start_deg[0], &start_deg[1],
@@ -264,11 +272,12 @@ int main(int argc, char **argv)
     }
     /* the power-up positions in counts must fit 0x6064's INTEGER32 */
     for (i = 0; i < 3; i++) {
-        if (!(fabs(start_deg[i] * counts_per_deg[i]) < 2.0e9)) {
+        if (!(fabs(offset_counts[i] + start_deg[i] * counts_per_deg[i]) <
+              2.0e9)) {
             fprintf(stderr,
-                    "servo_sim: --start-deg %g times --counts-per-deg %g is "
-                    "beyond a 32-bit position\n",
-                    start_deg[i], counts_per_deg[i]);
+                    "servo_sim: --start-deg %g times --counts-per-deg %g "
+                    "(from %g at 0 degrees) is beyond a 32-bit position\n",
+                    start_deg[i], counts_per_deg[i], offset_counts[i]);
             return 2;
         }
     }
@@ -281,14 +290,16 @@ int main(int argc, char **argv)
         unsigned j, k = i < 3 ? i : 2;
         memset(&cfg[i], 0, sizeof cfg[i]);
         cfg[i].node = nodes[i];
-        cfg[i].limit_min = (int32_t)(lim_deg[k][0] * counts_per_deg[k]);
-        cfg[i].limit_max = (int32_t)(lim_deg[k][1] * counts_per_deg[k]);
+        cfg[i].limit_min =
+            (int32_t)(offset_counts[k] + lim_deg[k][0] * counts_per_deg[k]);
+        cfg[i].limit_max =
+            (int32_t)(offset_counts[k] + lim_deg[k][1] * counts_per_deg[k]);
         if (k == 0) { /* alpha wraps (design.md section 3): no end stops */
             cfg[i].limit_min = INT32_MIN;
             cfg[i].limit_max = INT32_MAX;
         }
         if (i < 3) {
-            double c = start_deg[i] * counts_per_deg[i];
+            double c = offset_counts[i] + start_deg[i] * counts_per_deg[i];
             cfg[i].start_position = (int32_t)(c < 0 ? c - 0.5 : c + 0.5);
         }
         for (j = 0; j < n_lim; j++) {

@@ -74,6 +74,22 @@ bool parse_counts_per_deg(const std::string &text, double out[3])
     return all_within(size, 1e-6, 1e7); // the sign is the drive's direction
 }
 
+const char *const kOffsetCountsWanted =
+    "whole counts within 1e9 in size, one for every joint or three";
+
+bool parse_offset_counts(const std::string &text, int32_t out[3])
+{
+    double v[3];
+    if (!parse_per_joint(text, v) || !all_within(v, -1e9, 1e9))
+        return false;
+    for (int j = 0; j < 3; j++)
+        if (v[j] != std::floor(v[j]))
+            return false;
+    for (int j = 0; j < 3; j++)
+        out[j] = int32_t(v[j]);
+    return true;
+}
+
 const char *const kMotionWanted =
     "0.001..10000 degrees a second (squared), one for every joint or three";
 

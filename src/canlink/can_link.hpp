@@ -60,6 +60,12 @@ bool all_within(const double x[3], double lo, double hi);
 bool parse_counts_per_deg(const std::string &text, double out[3]);
 extern const char *const kCountsPerDegWanted;
 
+// Each drive's position in counts at the joint's 0 degrees (the encoder's
+// zero need not be the arm's), parse_per_joint's way: whole numbers within
+// 1e9 in size. The error text is kOffsetCountsWanted.
+bool parse_offset_counts(const std::string &text, int32_t out[3]);
+extern const char *const kOffsetCountsWanted;
+
 // Top joint speeds (deg/s) or accelerations (deg/s^2), parse_per_joint's
 // way: each in 0.001..10000. The error text is kMotionWanted.
 bool parse_speed_or_accel(const std::string &text, double out[3]);

@@ -41,6 +41,8 @@ const char *kUsage =
     "  --nodes A,B,C        drive node ids of alpha, sigma, eta (1,2,3)\n"
     "  --counts-per-deg X[,Y,Z]  drive counts per joint degree: one for\n"
     "                       every joint, or one each (1000)\n"
+    "  --offset-counts A[,B,C]  each drive's counts at the joint's 0\n"
+    "                       degrees (0)\n"
     "  --speed DEG_S        top joint speed (30); --accel DEG_S2 (60);\n"
     "                       one for every joint, or one each (X,Y,Z)\n"
     "  --timeout S          give up after S seconds (120)\n"
@@ -162,6 +164,13 @@ int main(int argc, char **argv)
                                   qrt::kCountsPerDegWanted);
             for (int j = 0; j < 3; j++)
                 cfg.scale[j].counts_per_deg = c[j];
+        } else if (a == "--offset-counts") {
+            int32_t o[3];
+            if (!qrt::parse_offset_counts(value(a.c_str()), o))
+                return fail_input(std::string("--offset-counts wants ") +
+                                  qrt::kOffsetCountsWanted);
+            for (int j = 0; j < 3; j++)
+                cfg.scale[j].offset_counts = o[j];
         } else if (a == "--speed" || a == "--accel") {
             double m[3];
             if (!qrt::parse_speed_or_accel(value(a.c_str()), m))

@@ -695,13 +695,15 @@ int Daemon::run(const std::atomic<bool> &stop)
     if (!opts_.can_iface.empty()) {
         const qrtcan_master_config &c = opts_.can;
         log(LogLevel::info,
-            "CAN %s: nodes %u,%u,%u, counts/deg %g,%g,%g, speed %g,%g,%g "
-            "deg/s, accel %g,%g,%g deg/s^2",
+            "CAN %s: nodes %u,%u,%u, counts/deg %g,%g,%g, counts at 0 deg "
+            "%ld,%ld,%ld, speed %g,%g,%g deg/s, accel %g,%g,%g deg/s^2",
             opts_.can_iface.c_str(), c.node[0], c.node[1], c.node[2],
             c.scale[0].counts_per_deg, c.scale[1].counts_per_deg,
-            c.scale[2].counts_per_deg, c.max_speed_deg_s[0],
-            c.max_speed_deg_s[1], c.max_speed_deg_s[2], c.max_accel_deg_s2[0],
-            c.max_accel_deg_s2[1], c.max_accel_deg_s2[2]);
+            c.scale[2].counts_per_deg, long(c.scale[0].offset_counts),
+            long(c.scale[1].offset_counts), long(c.scale[2].offset_counts),
+            c.max_speed_deg_s[0], c.max_speed_deg_s[1], c.max_speed_deg_s[2],
+            c.max_accel_deg_s2[0], c.max_accel_deg_s2[1],
+            c.max_accel_deg_s2[2]);
         can_.reset(new CanLink(opts_.can_iface, opts_.can));
         std::string why;
         if (!can_->start(&why)) {

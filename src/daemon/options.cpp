@@ -57,6 +57,8 @@ const char *kUsage =
     "  --can-nodes A,B,C        drive node ids of alpha, sigma, eta (1,2,3)\n"
     "  --counts-per-deg X[,Y,Z] drive counts per joint degree: one for\n"
     "                           every joint, or one each (1000)\n"
+    "  --offset-counts A[,B,C]  each drive's counts at the joint's 0\n"
+    "                           degrees (0)\n"
     "  --speed DEG_S[,S2,S3]    top joint speed (30)\n"
     "  --accel DEG_S2[,A2,A3]   joint acceleration (60); each one for\n"
     "                           every joint, or one each\n"
@@ -184,6 +186,12 @@ bool apply(Options *o, const std::string &key, const std::string &value,
             return bad(kCountsPerDegWanted);
         for (int j = 0; j < 3; j++)
             o->can.scale[j].counts_per_deg = c[j];
+    } else if (key == "offset-counts") {
+        int32_t off[3];
+        if (!parse_offset_counts(value, off))
+            return bad(kOffsetCountsWanted);
+        for (int j = 0; j < 3; j++)
+            o->can.scale[j].offset_counts = off[j];
     } else if (key == "speed" || key == "accel") {
         double m[3];
         if (!parse_speed_or_accel(value, m))

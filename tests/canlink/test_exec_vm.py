@@ -15,9 +15,10 @@ host's kernel has no CAN). On vcan0:
   3. The interface goes down in the middle of a move and comes back: the
      master reports the bus, nothing crashes; then a new plan from where the
      arm stopped executes to the goal (recovery).
-  4. Drives with their own counts per degree each (--counts-per-deg X,Y,Z
-     on servo_sim and qrtplan-exec): the arm is read where it stands and a
-     plan from there executes to its goal.
+  4. Drives with their own counts per degree and counts at 0 degrees each
+     (--counts-per-deg X,Y,Z and --offset-counts A,B,C on servo_sim and
+     qrtplan-exec): the arm is read where it stands and a plan from there
+     executes to its goal.
   5. Every frame of every capture decodes with can/qrtplan.dbc (cantools).
 """
 import argparse
@@ -296,28 +297,30 @@ def scenario_unplug(args):
 
 def scenario_scales(args):
     """Drives geared differently on each joint (1000, 2000 and 500 counts a
-    degree): read with one scale for all, the sigma and eta the drives power
-    up at are 20 and -10, not 10 and -20; with the drives' own scales the
-    arm is where it stands and a plan from there reaches its goal."""
-    scales = "1000,2000,500"
-    bus = Bus(args, "scales", ["--start-deg", "-100,10,-20",
-                               "--counts-per-deg", scales])
+    degree) whose encoders read 5000, -20000 and 0 counts at the joints' 0
+    degrees: read with one scale for all and no offsets, the joints the
+    drives power up at are (-95, 0, -10), not (-100, 10, -20); with the
+    drives' own scales and offsets the arm is where it stands and a plan
+    from there reaches its goal."""
+    drive = ["--counts-per-deg", "1000,2000,500",
+             "--offset-counts", "5000,-20000,0"]
+    bus = Bus(args, "scales", ["--start-deg", "-100,10,-20", *drive])
     try:
         here = {}
-        for given in ("1000", scales):
+        for name, given in (("plain", []), ("own", drive)):
             r = subprocess.run([args.exec, "--can", "vcan0", "--where",
-                                "--counts-per-deg", given,
-                                "--heartbeat-timeout", "1500"],
+                                "--heartbeat-timeout", "1500", *given],
                                capture_output=True, text=True, timeout=60)
-            check(r.returncode == 0, f"--where --counts-per-deg {given}: "
+            check(r.returncode == 0, f"--where {' '.join(given)}: "
                   f"{r.stderr.strip()}")
-            here[given] = json.loads(r.stdout) if r.returncode == 0 else None
-        check(here["1000"] is not None and
-              np.allclose(here["1000"], [-100, 20, -10], atol=0.02),
-              f"one scale for all reads {here['1000']}: the test can fail")
-        check(here[scales] is not None and
-              np.allclose(here[scales], [-100, 10, -20], atol=0.02),
-              f"each joint's own scale reads {here[scales]}")
+            here[name] = json.loads(r.stdout) if r.returncode == 0 else None
+        check(here["plain"] is not None and
+              np.allclose(here["plain"], [-95, 0, -10], atol=0.02),
+              f"one scale for all, no offsets, reads {here['plain']}: the "
+              "test can fail")
+        check(here["own"] is not None and
+              np.allclose(here["own"], [-100, 10, -20], atol=0.02),
+              f"each joint's own scale and offset reads {here['own']}")
         scene = {"version": 1, "points": [[0.0, 0.9, 0.5]],
                  "start": {"joints_deg": [-100, 10, -20]},
                  "goal": {"joints_deg": [-60, 40, -50]}}
@@ -327,11 +330,11 @@ def scenario_scales(args):
         plan_path = os.path.join(args.out, "scales.plan.json")
         p = plan(args, scene_path, plan_path)
         trace = os.path.join(args.out, "scales.trace.csv")
-        proc = execute(args, plan_path, trace,
-                       extra=("--counts-per-deg", scales))
+        proc = execute(args, plan_path, trace, extra=drive)
         out, err = proc.communicate(timeout=120)
         print(out + err, flush=True)
-        check(proc.returncode == 0, f"qrtplan-exec with per-joint scales: "
+        check(proc.returncode == 0, f"qrtplan-exec with per-joint scales and "
+              f"offsets: "
               f"exit {proc.returncode}")
         q, _ = read_trace(trace)
         end = q[-1] - np.asarray(p["waypoints_deg"][-1], float)

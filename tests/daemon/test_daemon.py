@@ -159,12 +159,13 @@ def test_the_log_says_what_the_daemon_made_of_its_options(daemon):
                   "--limits-deg", "-180,180,-10,170,-150,130",
                   "--can", "qrt_no_such_bus", "--can-nodes", "4,5,6",
                   "--counts-per-deg", "1000,2000,-500", "--speed", "40,10,20",
-                  "--accel", "80,20,40")
+                  "--accel", "80,20,40", "--offset-counts", "5000,-20000,7")
     text = d.text()
     assert ("arm: links 0.1,0.4,0.45 m, radii 0.03,0.025,0.02 m, limits "
             "-180..180 -10..170 -150..130 deg") in text, text
     assert ("CAN qrt_no_such_bus: nodes 4,5,6, counts/deg 1000,2000,-500, "
-            "speed 40,10,20 deg/s, accel 80,20,40 deg/s^2") in text, text
+            "counts at 0 deg 5000,-20000,7, speed 40,10,20 deg/s, "
+            "accel 80,20,40 deg/s^2") in text, text
 
 
 def test_bad_messages_get_a_status_and_the_daemon_keeps_serving(daemon):

@@ -51,6 +51,15 @@ def run_sim(args):
     (["--counts-per-deg", "1000, 2000,500"], "bad value for --counts-per-deg"),
     (["--counts-per-deg", "1000,0,500"], "bad value for --counts-per-deg"),
     (["--counts-per-deg", "1000x"], "bad value for --counts-per-deg"),
+    (["--offset-counts", "5000,2000"], "bad value for --offset-counts"),
+    (["--offset-counts", "1.5"], "bad value for --offset-counts"),
+    (["--offset-counts", "2e9"], "bad value for --offset-counts"),
+    (["--offset-counts", "5000,,0"], "bad value for --offset-counts"),
+    (["--offset-counts", "5000, 0,0"], "bad value for --offset-counts"),
+    (["--offset-counts", "x"], "bad value for --offset-counts"),
+    # 1e9 counts at 100000 degrees fit; from 1e9 at 0 degrees they do not
+    (["--start-deg", "0,100000,0", "--counts-per-deg", "10000",
+      "--offset-counts", "0,1000000000,0"], "(from 1e+09 at 0 degrees)"),
     # per joint: 30000 deg at 100000 counts a degree is sigma's alone
     (["--start-deg", "0,30000,0", "--counts-per-deg", "1000,100000,1000"],
      "--start-deg 30000 times --counts-per-deg 100000"),
@@ -237,3 +246,17 @@ def test_per_joint_speed_and_accel_accepted(tmp_path):
                         "5", str(plan)], capture_output=True, text=True,
                        timeout=30)
     assert r.returncode != 2 and "qrt_no_such_bus" in r.stderr, r.stderr
+
+
+@pytest.mark.parametrize("value", ["5000,2000", "1.5", "2e9", "5000,,0",
+                                   "5000, 0,0", "nan", "0,0,0,0", ""])
+def test_bad_offset_counts_refused_by_the_daemon_and_exec(tmp_path, value):
+    plan = tmp_path / "p.json"
+    plan.write_text('{"status": "ok", "waypoints_deg": [[0, 0, 0], [5, 0, 0]]}')
+    r = subprocess.run([str(EXEC), "--offset-counts", value, "--can",
+                        "qrt_no_such_bus", str(plan)], capture_output=True,
+                       text=True, timeout=30)
+    assert r.returncode == 2 and "--offset-counts wants whole" in r.stderr
+    r = subprocess.run([str(DAEMON), "--offset-counts", value, "--help"],
+                       capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2 and "offset-counts: whole" in r.stderr
