@@ -199,39 +199,36 @@ def test_per_joint_counts_reach_the_bus():
     assert "qrt_no_such_bus" in r.stderr or "socket" in r.stderr
 
 
-@pytest.mark.parametrize("value", ["1000,2000", "0", "1000,0,1", "1e8",
-                                   "1000,-2e7,1", "nan", "1000, 2000,500", ""])
-def test_bad_counts_per_deg_refused_by_the_daemon_and_exec(tmp_path, value):
+# the per-joint drive settings qrtpland and qrtplan-exec share a parser for:
+# each option's malformed values, and the words that name what it wants
+PER_JOINT_BAD = (
+    [("--counts-per-deg", v, "non-zero") for v in
+     ["1000,2000", "0", "1000,0,1", "1e8", "1000,-2e7,1", "nan",
+      "1000, 2000,500", ""]] +
+    [(o, v, "0.001..10000") for o in ("--speed", "--accel") for v in
+     ["30,60", "0", "30,0,30", "1e5", "-30", "nan", "30,60,90,1", "30,,30"]] +
+    [("--offset-counts", v, "whole") for v in
+     ["5000,2000", "1.5", "2e9", "5000,,0", "5000, 0,0", "nan", "0,0,0,0",
+      ""]])
+
+
+@pytest.mark.parametrize("option,value,wants", PER_JOINT_BAD)
+def test_bad_per_joint_values_refused_by_the_daemon_and_exec(tmp_path, option,
+                                                             value, wants):
     plan = tmp_path / "p.json"
     plan.write_text('{"status": "ok", "waypoints_deg": [[0, 0, 0], [5, 0, 0]]}')
-    r = subprocess.run([str(EXEC), "--counts-per-deg", value, "--can",
-                        "qrt_no_such_bus", str(plan)], capture_output=True,
-                       text=True, timeout=30)
-    assert r.returncode == 2 and "--counts-per-deg wants non-zero" in r.stderr
-    r = subprocess.run([str(DAEMON), "--counts-per-deg", value, "--help"],
+    r = subprocess.run([str(EXEC), option, value, "--can", "qrt_no_such_bus",
+                        str(plan)], capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2 and f"{option} wants {wants}" in r.stderr
+    r = subprocess.run([str(DAEMON), option, value, "--help"],
                        capture_output=True, text=True, timeout=30)
-    assert r.returncode == 2 and "counts-per-deg: non-zero" in r.stderr
+    assert r.returncode == 2 and f"{option[2:]}: {wants}" in r.stderr
 
 
 def test_per_joint_counts_accepted_by_the_daemon():
     r = subprocess.run([str(DAEMON), "--counts-per-deg", "1000,-2000,500",
                         "--help"], capture_output=True, text=True, timeout=30)
     assert r.returncode == 0, r.stderr
-
-
-@pytest.mark.parametrize("option", ["--speed", "--accel"])
-@pytest.mark.parametrize("value", ["30,60", "0", "30,0,30", "1e5", "-30",
-                                   "nan", "30,60,90,1", "30,,30"])
-def test_bad_speed_or_accel_refused_by_the_daemon_and_exec(tmp_path, option,
-                                                           value):
-    plan = tmp_path / "p.json"
-    plan.write_text('{"status": "ok", "waypoints_deg": [[0, 0, 0], [5, 0, 0]]}')
-    r = subprocess.run([str(EXEC), option, value, "--can", "qrt_no_such_bus",
-                        str(plan)], capture_output=True, text=True, timeout=30)
-    assert r.returncode == 2 and option + " wants 0.001..10000" in r.stderr
-    r = subprocess.run([str(DAEMON), option, value, "--help"],
-                       capture_output=True, text=True, timeout=30)
-    assert r.returncode == 2 and option[2:] + ": 0.001..10000" in r.stderr
 
 
 def test_per_joint_speed_and_accel_accepted(tmp_path):
@@ -246,17 +243,3 @@ def test_per_joint_speed_and_accel_accepted(tmp_path):
                         "5", str(plan)], capture_output=True, text=True,
                        timeout=30)
     assert r.returncode != 2 and "qrt_no_such_bus" in r.stderr, r.stderr
-
-
-@pytest.mark.parametrize("value", ["5000,2000", "1.5", "2e9", "5000,,0",
-                                   "5000, 0,0", "nan", "0,0,0,0", ""])
-def test_bad_offset_counts_refused_by_the_daemon_and_exec(tmp_path, value):
-    plan = tmp_path / "p.json"
-    plan.write_text('{"status": "ok", "waypoints_deg": [[0, 0, 0], [5, 0, 0]]}')
-    r = subprocess.run([str(EXEC), "--offset-counts", value, "--can",
-                        "qrt_no_such_bus", str(plan)], capture_output=True,
-                       text=True, timeout=30)
-    assert r.returncode == 2 and "--offset-counts wants whole" in r.stderr
-    r = subprocess.run([str(DAEMON), "--offset-counts", value, "--help"],
-                       capture_output=True, text=True, timeout=30)
-    assert r.returncode == 2 and "offset-counts: whole" in r.stderr
