@@ -60,42 +60,48 @@ bool all_within(const double x[3], double lo, double hi)
            x[2] <= hi;
 }
 
-const char *const kCountsPerDegWanted =
-    "non-zero counts per degree, 1e-6..1e7 in size, one for every joint or "
-    "three";
-
-bool parse_counts_per_deg(const std::string &text, double out[3])
+bool is_drive_setting(const std::string &key)
 {
-    double size[3];
-    if (!parse_per_joint(text, out))
-        return false;
-    for (int j = 0; j < 3; j++)
-        size[j] = std::fabs(out[j]);
-    return all_within(size, 1e-6, 1e7); // the sign is the drive's direction
+    return key == "counts-per-deg" || key == "offset-counts" ||
+           key == "speed" || key == "accel";
 }
 
-const char *const kOffsetCountsWanted =
-    "whole counts within 1e9 in size, one for every joint or three";
-
-bool parse_offset_counts(const std::string &text, int32_t out[3])
+bool drive_setting(qrtcan_master_config *cfg, const std::string &key,
+                   const std::string &value, std::string *wanted)
 {
-    double v[3];
-    if (!parse_per_joint(text, v) || !all_within(v, -1e9, 1e9))
-        return false;
-    for (int j = 0; j < 3; j++)
-        if (v[j] != std::floor(v[j]))
+    double v[3], size[3];
+    bool ok = parse_per_joint(value, v);
+    if (key == "counts-per-deg") {
+        for (int j = 0; ok && j < 3; j++)
+            size[j] = std::fabs(v[j]);
+        if (!ok || !all_within(size, 1e-6, 1e7)) {
+            *wanted = "non-zero counts per degree, 1e-6..1e7 in size, one "
+                      "for every joint or three";
             return false;
-    for (int j = 0; j < 3; j++)
-        out[j] = int32_t(v[j]);
+        }
+        for (int j = 0; j < 3; j++)
+            cfg->scale[j].counts_per_deg = v[j];
+    } else if (key == "offset-counts") {
+        for (int j = 0; ok && j < 3; j++)
+            ok = v[j] == std::floor(v[j]);
+        if (!ok || !all_within(v, -1e9, 1e9)) {
+            *wanted = "whole counts within 1e9 in size, one for every joint "
+                      "or three";
+            return false;
+        }
+        for (int j = 0; j < 3; j++)
+            cfg->scale[j].offset_counts = int32_t(v[j]);
+    } else { // speed or accel
+        if (!ok || !all_within(v, 1e-3, 1e4)) {
+            *wanted = "0.001..10000 degrees a second (squared), one for "
+                      "every joint or three";
+            return false;
+        }
+        for (int j = 0; j < 3; j++)
+            (key == "speed" ? cfg->max_speed_deg_s : cfg->max_accel_deg_s2)[j] =
+                v[j];
+    }
     return true;
-}
-
-const char *const kMotionWanted =
-    "0.001..10000 degrees a second (squared), one for every joint or three";
-
-bool parse_speed_or_accel(const std::string &text, double out[3])
-{
-    return parse_per_joint(text, out) && all_within(out, 1e-3, 1e4);
 }
 
 bool parse_limits_deg(const std::string &text, double lim[3][2])

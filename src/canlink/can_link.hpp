@@ -54,22 +54,16 @@ bool parse_per_joint(const std::string &text, double out[3]);
 // Whether each of x[0..2] is in [lo, hi] (false for NaN).
 bool all_within(const double x[3], double lo, double hi);
 
-// Drive counts per joint degree, parse_per_joint's way: each 1e-6..1e7 in
-// size, its sign the drive's direction. The error text is
-// kCountsPerDegWanted.
-bool parse_counts_per_deg(const std::string &text, double out[3]);
-extern const char *const kCountsPerDegWanted;
-
-// Each drive's position in counts at the joint's 0 degrees (the encoder's
-// zero need not be the arm's), parse_per_joint's way: whole numbers within
-// 1e9 in size. The error text is kOffsetCountsWanted.
-bool parse_offset_counts(const std::string &text, int32_t out[3]);
-extern const char *const kOffsetCountsWanted;
-
-// Top joint speeds (deg/s) or accelerations (deg/s^2), parse_per_joint's
-// way: each in 0.001..10000. The error text is kMotionWanted.
-bool parse_speed_or_accel(const std::string &text, double out[3]);
-extern const char *const kMotionWanted;
+// The drive settings qrtpland and qrtplan-exec share, by option name without
+// "--", each one value for every joint or three (parse_per_joint):
+// counts-per-deg (1e-6..1e7 in size, the sign the drive's direction),
+// offset-counts (each drive's counts at the joint's 0 degrees, whole,
+// within 1e9), speed (deg/s) and accel (deg/s^2), both 0.001..10000.
+// drive_setting takes one into cfg; false, with *wanted saying what the key
+// takes, for a bad value.
+bool is_drive_setting(const std::string &key);
+bool drive_setting(qrtcan_master_config *cfg, const std::string &key,
+                   const std::string &value, std::string *wanted);
 
 // "a0,a1,s0,s1,e0,e1": the joint limits in degrees, as the daemon's
 // --limits-deg and qrtplan-exec's take them: each low below its high, all

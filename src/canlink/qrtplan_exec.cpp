@@ -145,6 +145,7 @@ int main(int argc, char **argv)
             return argv[++i];
         };
         double v = 0;
+        std::string wanted;
         if (a == "--help" || a == "-h") {
             std::fputs(kUsage, stdout);
             return 0;
@@ -157,27 +158,10 @@ int main(int argc, char **argv)
                     "--nodes wants three distinct ids in 1..127, e.g. 1,2,3");
             for (int j = 0; j < 3; j++)
                 cfg.node[j] = n[j];
-        } else if (a == "--counts-per-deg") {
-            double c[3];
-            if (!qrt::parse_counts_per_deg(value(a.c_str()), c))
-                return fail_input(std::string("--counts-per-deg wants ") +
-                                  qrt::kCountsPerDegWanted);
-            for (int j = 0; j < 3; j++)
-                cfg.scale[j].counts_per_deg = c[j];
-        } else if (a == "--offset-counts") {
-            int32_t o[3];
-            if (!qrt::parse_offset_counts(value(a.c_str()), o))
-                return fail_input(std::string("--offset-counts wants ") +
-                                  qrt::kOffsetCountsWanted);
-            for (int j = 0; j < 3; j++)
-                cfg.scale[j].offset_counts = o[j];
-        } else if (a == "--speed" || a == "--accel") {
-            double m[3];
-            if (!qrt::parse_speed_or_accel(value(a.c_str()), m))
-                return fail_input(a + " wants " + qrt::kMotionWanted);
-            for (int j = 0; j < 3; j++)
-                (a == "--speed" ? cfg.max_speed_deg_s
-                                : cfg.max_accel_deg_s2)[j] = m[j];
+        } else if (a.size() > 2 && qrt::is_drive_setting(a.substr(2))) {
+            if (!qrt::drive_setting(&cfg, a.substr(2), value(a.c_str()),
+                                    &wanted))
+                return fail_input(a + " wants " + wanted);
         } else if (a == "--limits-deg") {
             if (!qrt::parse_limits_deg(value(a.c_str()), cfg.limit_deg))
                 return fail_input("--limits-deg wants six numbers "

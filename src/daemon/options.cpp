@@ -118,7 +118,11 @@ bool apply(Options *o, const std::string &key, const std::string &value,
                            : key == "joint-channel"   ? &o->joint_channel
                            : key == "status-channel"  ? &o->status_channel
                                                       : nullptr;
-    if (channel) {
+    std::string wanted;
+    if (is_drive_setting(key)) {
+        if (!drive_setting(&o->can, key, value, &wanted))
+            return bad(wanted.c_str());
+    } else if (channel) {
         // LCM subscribes by regular expression: a '.' or '*' in a name
         // would take other channels' messages too
         if (!channel_name_ok(value))
@@ -180,25 +184,6 @@ bool apply(Options *o, const std::string &key, const std::string &value,
             return bad("three distinct node ids in 1..127, e.g. 1,2,3");
         for (int j = 0; j < 3; j++)
             o->can.node[j] = n[j];
-    } else if (key == "counts-per-deg") {
-        double c[3];
-        if (!parse_counts_per_deg(value, c))
-            return bad(kCountsPerDegWanted);
-        for (int j = 0; j < 3; j++)
-            o->can.scale[j].counts_per_deg = c[j];
-    } else if (key == "offset-counts") {
-        int32_t off[3];
-        if (!parse_offset_counts(value, off))
-            return bad(kOffsetCountsWanted);
-        for (int j = 0; j < 3; j++)
-            o->can.scale[j].offset_counts = off[j];
-    } else if (key == "speed" || key == "accel") {
-        double m[3];
-        if (!parse_speed_or_accel(value, m))
-            return bad(kMotionWanted);
-        for (int j = 0; j < 3; j++)
-            (key == "speed" ? o->can.max_speed_deg_s
-                            : o->can.max_accel_deg_s2)[j] = m[j];
     } else if (key == "heartbeat-timeout") {
         if (!number(20, 60000))
             return bad("milliseconds in 20..60000");
