@@ -94,12 +94,6 @@ bool channel_name_ok(const std::string &s)
     return true;
 }
 
-bool all_within(const double x[3], double lo, double hi)
-{
-    return x[0] >= lo && x[0] <= hi && x[1] >= lo && x[1] <= hi && x[2] >= lo &&
-           x[2] <= hi;
-}
-
 // One setting; false with *error set if the key or value is bad.
 bool apply(Options *o, const std::string &key, const std::string &value,
            std::string *error)
