@@ -5,7 +5,8 @@ Run by CTest's `daemon_can_vm` through tools/vm/run.sh (inside a VM when
 this host's kernel has no CAN), and by `make bench` for the stop latency
 (--trials 200). servo_sim powers up at the paper's Table 4 start; the
 daemon gets the Table 4 sphere as a scan and a goal with no start, so it
-plans from the joints the drives report, and moves the arm:
+plans from the joints the drives report (their own counts per degree and
+counts at 0 degrees, given to both sides), and moves the arm:
   1. the joints the daemon publishes (from the drives' PDOs) reach the
      goal, and every pose on the way is collision-free by the oracle;
   2. trials: while the arm moves, a scan puts an obstacle on the rest of
@@ -28,6 +29,10 @@ import cantools
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+# drives geared differently on each joint, their encoders zeroed elsewhere
+# than the joints (both sides told the same)
+DRIVES = ["--counts-per-deg", "1000,2000,500", "--offset-counts",
+          "5000,-20000,0"]
 REPO = os.path.dirname(os.path.dirname(HERE))
 sys.path[:0] = [os.path.join(REPO, "tools"), os.path.join(REPO, "tests", "daemon")]
 # the VM does not pass the environment on: the generated types' path comes
@@ -79,13 +84,14 @@ def main():
     dump = start(capture)  # listening before the drives start
     sim = subprocess.Popen([args.servo_sim, "--iface", "vcan0", "--start-deg",
                             "-100,0,0", "--servo-error", "5", "--watchdog-ms",
-                            "500"], stderr=open(os.path.join(args.out, "sim.log"), "w"))
+                            "500", *DRIVES],
+                           stderr=open(os.path.join(args.out, "sim.log"), "w"))
     # emptied, then appended to: the log is read while the daemon runs,
     # and its writes must not land where that read's seek left the offset
     open(os.path.join(args.out, "qrtpland.log"), "w").close()
     daemon_log = open(os.path.join(args.out, "qrtpland.log"), "a+")
     daemon = subprocess.Popen([args.daemon, "--lcm-url", url, "--can", "vcan0",
-                               "--speed", "30", "--accel", "60",
+                               "--speed", "30", "--accel", "60", *DRIVES,
                                # emulated CPU, busy host: heartbeats come late
                                "--heartbeat-timeout", "1500"],
                               stdout=daemon_log, stderr=subprocess.STDOUT)
@@ -114,6 +120,13 @@ def main():
     try:
         ok = pump(15, lambda: joints and joints[-1].drive_state == "ready")
         check(ok, f"the daemon brought the drives up ({time.time() - t0:.1f} s)")
+        # read with one scale for all and no offsets, they would be at
+        # (-95, -20, 0)
+        here = list(joints[-1].joints_deg) if joints else None
+        check(here is not None and
+              np.allclose(here, [-100, 0, 0], atol=0.02),
+              f"the daemon reads the drives, each geared and zeroed its own "
+              f"way, where they stand: {here}")
         clear = cf.scan_from_points(pts)
         lc.publish("QRT_SCAN", clear.encode())
         lc.publish("QRT_PLAN_REQUEST", cf.request(goal, request_id=1).encode())
