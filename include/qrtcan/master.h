@@ -171,6 +171,10 @@ void qrtcan_master_shutdown(struct qrtcan_master *m, uint64_t now_us);
 int qrtcan_master_set_path(struct qrtcan_master *m, const double (*wp)[3],
                            int n, uint64_t now_us);
 
+/* 1 if lim ([joint][lo, hi], degrees) is what a config may hold: each low
+ * below its high, all within [-180, 180]; qrtcan_master_init checks it. */
+int qrtcan_limits_valid(const double (*lim)[2]);
+
 /* The first of the n waypoints outside cfg's joint limits, or after an
  * alpha step the long way round where alpha does not wrap; -1 if none (the
  * test set_path makes, for a caller that would say which). */

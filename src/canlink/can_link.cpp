@@ -106,17 +106,10 @@ bool drive_setting(qrtcan_master_config *cfg, const std::string &key,
 
 bool parse_limits_deg(const std::string &text, double lim[3][2])
 {
-    double v[6];
-    if (!parse_numbers(text, v, 6))
+    double v[3][2];
+    if (!parse_numbers(text, &v[0][0], 6) || !qrtcan_limits_valid(v))
         return false;
-    for (int j = 0; j < 3; j++)
-        if (!(v[2 * j] < v[2 * j + 1] && v[2 * j] >= -180.0 &&
-              v[2 * j + 1] <= 180.0))
-            return false;
-    for (int j = 0; j < 3; j++) {
-        lim[j][0] = v[2 * j];
-        lim[j][1] = v[2 * j + 1];
-    }
+    std::memcpy(lim, v, sizeof v);
     return true;
 }
 

@@ -233,7 +233,7 @@ int qrtcan_master_init(struct qrtcan_master *m,
     if (!m || !cfg || !qrtcan_node_valid(cfg->master_node) ||
         cfg->sync_period_us == 0 || cfg->master_heartbeat_us == 0 ||
         cfg->sdo_timeout_us == 0 || cfg->sdo_attempts == 0 ||
-        cfg->heartbeat_timeout_us == 0)
+        cfg->heartbeat_timeout_us == 0 || !qrtcan_limits_valid(cfg->limit_deg))
         return QRTCAN_E_ARG;
     for (j = 0; j < QRTCAN_JOINTS; j++) {
         double c = cfg->scale[j].counts_per_deg;
@@ -242,9 +242,7 @@ int qrtcan_master_init(struct qrtcan_master *m,
             !(cfg->max_speed_deg_s[j] > 0.0) ||
             !(cfg->max_accel_deg_s2[j] > 0.0) ||
             !isfinite(cfg->max_speed_deg_s[j]) ||
-            !isfinite(cfg->max_accel_deg_s2[j]) ||
-            !(cfg->limit_deg[j][0] < cfg->limit_deg[j][1]) ||
-            !(cfg->limit_deg[j][0] >= -180.0 && cfg->limit_deg[j][1] <= 180.0))
+            !isfinite(cfg->max_accel_deg_s2[j]))
             return QRTCAN_E_ARG;
         for (k = 0; k < j; k++)
             if (cfg->node[k] == cfg->node[j])
@@ -316,6 +314,16 @@ static double joint_deg(const struct qrtcan_master *m, int j)
     double deg = 0.0;
     qrtcan_counts_to_deg(&m->cfg.scale[j], m->drive[j].position_counts, &deg);
     return deg;
+}
+
+int qrtcan_limits_valid(const double (*lim)[2])
+{
+    int j;
+    for (j = 0; j < QRTCAN_JOINTS; j++)
+        if (!(lim[j][0] < lim[j][1] && lim[j][0] >= -180.0 &&
+              lim[j][1] <= 180.0))
+            return 0;
+    return 1;
 }
 
 /* Alpha wraps (and has no limit) iff its limits are the whole circle, as
