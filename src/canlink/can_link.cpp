@@ -104,6 +104,9 @@ bool drive_setting(qrtcan_master_config *cfg, const std::string &key,
     return true;
 }
 
+const char *const kLimitsDegWanted =
+    "six numbers a0,a1,s0,s1,e0,e1 in -180..180, each low below its high";
+
 bool parse_limits_deg(const std::string &text, double lim[3][2])
 {
     double v[3][2];

@@ -70,6 +70,7 @@ bool drive_setting(qrtcan_master_config *cfg, const std::string &key,
 // within [-180, 180] (what the master takes). False for anything else, with
 // lim untouched.
 bool parse_limits_deg(const std::string &text, double lim[3][2]);
+extern const char *const kLimitsDegWanted; // what the error says it takes
 
 // The first waypoint outside cfg's joint limits (qrtcan_path_outside_limits,
 // the test CanLink::set_path meets in the master), or -1 if none.

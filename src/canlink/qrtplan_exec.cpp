@@ -164,9 +164,8 @@ int main(int argc, char **argv)
                 return fail_input(a + " wants " + wanted);
         } else if (a == "--limits-deg") {
             if (!qrt::parse_limits_deg(value(a.c_str()), cfg.limit_deg))
-                return fail_input("--limits-deg wants six numbers "
-                                  "a0,a1,s0,s1,e0,e1 in -180..180, each "
-                                  "low below its high");
+                return fail_input(std::string("--limits-deg wants ") +
+                                  qrt::kLimitsDegWanted);
         } else if (a == "--heartbeat-timeout") {
             if (!parse_double(value(a.c_str()), &v) || v < 20 || v > 60000)
                 return fail_input("--heartbeat-timeout wants 20..60000 ms");

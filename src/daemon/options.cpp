@@ -166,8 +166,7 @@ bool apply(Options *o, const std::string &key, const std::string &value,
             o->params.arm.link_m[j] = l[j];
     } else if (key == "limits-deg") {
         if (!parse_limits_deg(value, o->params.arm.limit_deg))
-            return bad("a0,a1,s0,s1,e0,e1 in -180..180, each low below its "
-                       "high");
+            return bad(kLimitsDegWanted);
     } else if (key == "dijkstra") {
         o->params.use_astar = 0;
     } else if (key == "can") {
