@@ -31,6 +31,16 @@ static void on_signal(int sig)
     stop_requested = 1;
 }
 
+/* --help and --version: text that never reached stdout is not success */
+static int finish_stdout(void)
+{
+    if (fflush(stdout) != 0 || ferror(stdout)) {
+        fprintf(stderr, "servo_sim: stdout: write failed\n");
+        return 2;
+    }
+    return 0;
+}
+
 static void usage(FILE *out)
 {
     fputs(
@@ -79,6 +89,7 @@ static void usage(FILE *out)
         "                        or SIGTERM)\n"
         "  --verbose             log every CiA 402 state change on stderr\n"
         "  --help                this text\n"
+        "  --version             the version\n"
         "\n"
         "Object dictionary, PDO mapping and EMCY codes: can/servo_sim.eds and\n"
         "firmware_sim/README.md.\n",
@@ -183,7 +194,11 @@ int main(int argc, char **argv)
         int bad = 0;
         if (strcmp(o, "--help") == 0 || strcmp(o, "-h") == 0) {
             usage(stdout);
-            return 0;
+            return finish_stdout();
+        }
+        if (strcmp(o, "--version") == 0) {
+            printf("servo_sim %s\n", QRT_VERSION);
+            return finish_stdout();
         }
         if (strcmp(o, "--verbose") == 0) {
             verbose = 1;

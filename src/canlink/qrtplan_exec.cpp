@@ -17,6 +17,7 @@
 
 extern "C" {
 #include "json.h"
+#include "qrtplan/qrtplan.h"
 }
 
 namespace
@@ -57,6 +58,7 @@ const char *kUsage =
     "                       [alpha, sigma, eta] degrees and exit (to plan\n"
     "                       from where the arm stands)\n"
     "  --help               this text\n"
+    "  --version            the version\n"
     "Exit status: 0 goal reached, 1 drive/bus fault or timeout, 2 bad input,\n"
     "130 interrupted (the drives get a quick stop).\n";
 
@@ -64,6 +66,14 @@ int fail_input(const std::string &msg)
 {
     std::fprintf(stderr, "qrtplan-exec: %s\n", msg.c_str());
     return 2;
+}
+
+// --help and --version: text that never reached stdout is not success
+int finish_stdout()
+{
+    if (std::fflush(stdout) != 0 || std::ferror(stdout))
+        return fail_input("stdout: write failed");
+    return 0;
 }
 
 bool parse_double(const char *s, double *out)
@@ -148,7 +158,10 @@ int main(int argc, char **argv)
         std::string wanted;
         if (a == "--help" || a == "-h") {
             std::fputs(kUsage, stdout);
-            return 0;
+            return finish_stdout();
+        } else if (a == "--version") {
+            std::printf("qrtplan-exec %s\n", QRTPLAN_VERSION);
+            return finish_stdout();
         } else if (a == "--can") {
             iface = value("--can");
         } else if (a == "--nodes") {

@@ -388,12 +388,12 @@ int main(int argc, char **argv)
         (argc > 2 && (strcmp(argv[2], "--help") == 0))) {
         fputs(usage, stdout);
         fputs(help, stdout);
-        return 0;
+        return close_output(stdout, NULL);
     }
     if (strcmp(argv[1], "--version") == 0) {
         printf("qrtplan %s (lattice >= %d deg, %d points exact)\n",
                QRTPLAN_VERSION, QRT_GRID_DEG_MIN, QRT_MAX_POINTS);
-        return 0;
+        return close_output(stdout, NULL);
     }
     if (strcmp(argv[1], "plan") == 0)
         return cmd_plan(argc - 2, argv + 2);

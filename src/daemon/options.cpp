@@ -1,6 +1,7 @@
 #include "options.hpp"
 
 #include "can_link.hpp"
+#include "qrtplan/qrtplan.h"
 
 #include <cctype>
 #include <cerrno>
@@ -269,7 +270,7 @@ int parse_options(int argc, char **argv, Options *o, std::string *error)
             return 1;
         }
         if (a == "--version") {
-            std::printf("qrtpland 0.1.0\n");
+            std::printf("qrtpland %s\n", QRTPLAN_VERSION);
             return 1;
         }
         if (a.compare(0, 2, "--") != 0) {

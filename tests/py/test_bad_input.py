@@ -4,6 +4,7 @@ crash or a hang."""
 import json
 import math
 import struct
+import subprocess
 
 import numpy as np
 import pytest
@@ -194,3 +195,23 @@ def test_help_and_usage(qrtplan):
     assert r.returncode == 2
     r = run_cli(["plan"])
     assert r.returncode == 2 and r.stderr.count("\n") == 1
+
+
+@pytest.mark.parametrize("program", ["qrtplan", "qrtplan-exec", "qrtpland",
+                                     "servo_sim"])
+@pytest.mark.parametrize("flag", ["--help", "--version"])
+def test_help_that_cannot_be_written_is_an_error(qrtplan, program, flag):
+    # `prog --help > /dev/full` used to exit 0, having printed nothing
+    path = qrtplan.parent / program
+    r = subprocess.run([str(path), flag], capture_output=True, text=True,
+                       timeout=30)
+    assert r.returncode == 0, r.stderr
+    if flag == "--version":
+        assert r.stdout.startswith(f"{program} 0.") and r.stdout.count("\n") == 1
+    else:
+        assert "usage" in r.stdout and "--version" in r.stdout
+    with open("/dev/full", "w") as full:
+        r = subprocess.run([str(path), flag], stdout=full,
+                           stderr=subprocess.PIPE, text=True, timeout=30)
+    assert r.returncode == 2
+    assert r.stderr == f"{program}: stdout: write failed\n"
