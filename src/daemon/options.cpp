@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <vector>
 
@@ -24,7 +25,8 @@ const char *kUsage =
     "three CiA 402 drives and stops them when a scan blocks the path being\n"
     "executed.\n"
     "\n"
-    "Options (also as `key = value` lines in the config file, without --):\n"
+    "Options (also as `key = value` lines in the config file, without --,\n"
+    "each at most once there):\n"
     "  --lcm-url URL            (udpm://239.255.76.67:7667?ttl=0)\n"
     "  --scan-channel NAME      scans on NAME and NAME_* (QRT_SCAN); each\n"
     "                           sensor_id keeps its own entry\n"
@@ -212,8 +214,13 @@ bool read_config(const std::string &path, Options *o, std::string *error)
     }
     std::string line;
     int lineno = 0;
+    // a setting given twice is a mistake in one of the two lines; taking
+    // the last would hide which one is in force
+    std::map<std::string, int> set_on_line;
     while (std::getline(in, line)) {
         lineno++;
+        if (lineno == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0)
+            line.erase(0, 3); // a UTF-8 byte-order mark, as some editors write
         auto hash = line.find('#');
         if (hash != std::string::npos)
             line.erase(hash);
@@ -232,6 +239,13 @@ bool read_config(const std::string &path, Options *o, std::string *error)
             eq == std::string::npos ? "" : trim(line.substr(eq + 1));
         if (eq == std::string::npos && !takes_no_value(key)) {
             *error = path + ":" + std::to_string(lineno) + ": want key = value";
+            return false;
+        }
+        auto [earlier, first_time] = set_on_line.emplace(key, lineno);
+        if (!first_time) {
+            *error = path + ":" + std::to_string(lineno) + ": " + key +
+                     " is already set on line " +
+                     std::to_string(earlier->second);
             return false;
         }
         if (!apply(o, key, value, error)) {

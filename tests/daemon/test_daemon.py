@@ -380,8 +380,8 @@ def test_config_file_and_flags(daemon, tmp_path):
                             "qrtpland.conf")).read()
     # the shipped example, with this test's own channels
     conf.write_text(src.replace("QRT_PLAN_REQUEST", "MY_REQ")
-                    .replace("plan-channel = QRT_PLAN", "plan-channel = QRT_PLAN")
-                    + "\nlog-level = debug\n")
+                    .replace("log-level = info", "log-level = debug"))
+    assert "log-level = debug" in conf.read_text()
     d, c = daemon("--config", str(conf))
     scene, pts = scene_points("three_spheres.json")
     c.publish("QRT_SCAN", scan_from_points(pts))
@@ -402,6 +402,24 @@ def test_config_file_and_flags(daemon, tmp_path):
     r = subprocess.run([DAEMON, "--config", str(tmp_path / "missing.conf")],
                        capture_output=True, text=True)
     assert r.returncode == 2 and "cannot open" in r.stderr, r.stderr
+
+
+def test_config_file_written_by_another_editor(daemon, tmp_path):
+    """A byte-order mark (Notepad) and CRLF line ends are read as the same
+    settings; a setting given twice in one file is refused with both lines
+    (taking the last one hid which was in force)."""
+    import subprocess
+    from conftest import DAEMON
+    conf = tmp_path / "win.conf"
+    conf.write_bytes(b"\xef\xbb\xbfgrid = 10\r\nmargin = 0.02\r\n")
+    d, c = daemon("--config", str(conf))
+    assert "grid 10 deg, margin 0.02 m" in d.text(), d.text()
+    twice = tmp_path / "twice.conf"
+    twice.write_text("grid = 5\nmargin = 0.01\n# grid = 20\n  grid=10\n")
+    r = subprocess.run([DAEMON, "--config", str(twice), "--help"],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and r.stderr == (
+        f"qrtpland: {twice}:4: grid is already set on line 1\n"), r.stderr
 
 
 def test_replayed_log(daemon):
