@@ -16,6 +16,7 @@ import json
 import math
 import numbers
 import os
+import struct
 import sys
 
 import numpy as np
@@ -156,6 +157,20 @@ def read_pcd(path):
            ("U", 4): "u4", ("U", 8): "u8"}
     dtype = np.dtype([(f_, "<" + fmt[(t, s)], (c,)) for f_, t, s, c in
                       zip(fields, types, sizes, counts)])
+    if header["DATA"][0] == "binary_compressed":
+        # liblzf's own decoder (python-neo-lzf), not the planner's; the
+        # rows come field by field: every point's first field, then the next
+        import lzf
+        packed, unpacked = struct.unpack_from("<II", data, pos)
+        raw = lzf.decompress(data[pos + 8:pos + 8 + packed], unpacked)
+        if raw is None or len(raw) != unpacked or unpacked != n * dtype.itemsize:
+            raise ValueError(f"{path}: binary_compressed data does not decode")
+        cols, at = {}, 0
+        for name in dtype.names:
+            width = dtype[name].itemsize * n
+            cols[name] = np.frombuffer(raw[at:at + width], dtype=dtype[name])
+            at += width
+        return np.stack([cols[a][:, 0] for a in "xyz"], axis=1).astype(float)
     rec = np.frombuffer(data, dtype=dtype, count=n, offset=pos)
     return np.stack([rec["x"][:, 0], rec["y"][:, 0], rec["z"][:, 0]], axis=1).astype(float)
 

@@ -1,6 +1,10 @@
 #define _POSIX_C_SOURCE 200809L
-/* PCD v0.7 reader: header lines, then ascii rows or packed binary rows. */
+/* PCD v0.7 reader: header lines, then ascii rows, packed binary rows, or
+ * binary_compressed: the rows' bytes field by field (every point's x, then
+ * every point's y, ...) compressed with LZF. */
 #include "pcd.h"
+
+#include "lzf.h"
 
 #include <errno.h>
 #include <math.h>
@@ -10,6 +14,10 @@
 #include <string.h>
 
 #define PCD_MAX_FIELDS 32
+/* binary_compressed data expands to no more than a file may hold */
+#define PCD_MAX_UNCOMPRESSED_BYTES (1ul << 30)
+
+enum pcd_data { PCD_ASCII, PCD_BINARY, PCD_BINARY_COMPRESSED };
 
 struct pcd_header {
     int nfields;
@@ -17,7 +25,7 @@ struct pcd_header {
     int size[PCD_MAX_FIELDS], count[PCD_MAX_FIELDS];
     char type[PCD_MAX_FIELDS];
     long width, height, points;
-    int binary;
+    enum pcd_data data;
     int seen_fields, seen_size, seen_type, seen_count;
 };
 
@@ -136,13 +144,15 @@ static int parse_header(const char *buf, size_t len, size_t *pos,
             char kind[32] = "";
             sscanf(rest, "%31s", kind);
             if (strcmp(kind, "ascii") == 0) {
-                h->binary = 0;
+                h->data = PCD_ASCII;
             } else if (strcmp(kind, "binary") == 0) {
-                h->binary = 1;
+                h->data = PCD_BINARY;
+            } else if (strcmp(kind, "binary_compressed") == 0) {
+                h->data = PCD_BINARY_COMPRESSED;
             } else {
                 snprintf(err, err_len,
-                         "DATA %s is not supported (ascii or "
-                         "binary only)",
+                         "DATA %s is not supported (ascii, binary or "
+                         "binary_compressed only)",
                          kind);
                 return -1;
             }
@@ -250,6 +260,104 @@ static int read_binary(const char *data, size_t avail,
     return 0;
 }
 
+static uint32_t le32(const char *p)
+{
+    const unsigned char *u = (const unsigned char *)p;
+    return (uint32_t)u[0] | (uint32_t)u[1] << 8 | (uint32_t)u[2] << 16 |
+           (uint32_t)u[3] << 24;
+}
+
+/* Two little-endian uint32, the compressed and the uncompressed size, then
+ * the LZF stream. Checked before anything is allocated: a few bytes must
+ * not make the reader ask for gigabytes. */
+static int check_compressed_sizes(const char *data, size_t avail,
+                                  const struct xyz_layout *L, long n, char *err,
+                                  size_t err_len)
+{
+    size_t want, packed, stated;
+    if ((size_t)n > PCD_MAX_UNCOMPRESSED_BYTES / L->row_bytes) {
+        snprintf(err, err_len,
+                 "binary_compressed data: %ld points of %zu bytes are more "
+                 "than 1 GiB",
+                 n, L->row_bytes);
+        return -1;
+    }
+    want = L->row_bytes * (size_t)n;
+    if (avail < 8) {
+        snprintf(err, err_len, "binary_compressed data truncated: no sizes");
+        return -1;
+    }
+    packed = le32(data);
+    stated = le32(data + 4);
+    if (stated != want) {
+        snprintf(err, err_len,
+                 "binary_compressed data says %zu bytes uncompressed, but "
+                 "%ld points of %zu bytes are %zu",
+                 stated, n, L->row_bytes, want);
+        return -1;
+    }
+    if (packed > avail - 8) {
+        snprintf(err, err_len,
+                 "binary_compressed data truncated: %zu bytes stated, file "
+                 "has %zu",
+                 packed, avail - 8);
+        return -1;
+    }
+    if (want / LZF_MAX_EXPANSION > packed) {
+        snprintf(err, err_len,
+                 "binary_compressed data: %zu bytes cannot expand to %zu "
+                 "(LZF expands at most %d times)",
+                 packed, want, LZF_MAX_EXPANSION);
+        return -1;
+    }
+    return 0;
+}
+
+/* The rows stored field by field (every point's x, then every point's y,
+ * ...): field f's values start at n times f's offset in a row. Sizes as
+ * check_compressed_sizes passed them. */
+static int read_compressed(const char *data, const struct xyz_layout *L, long n,
+                           double *xyz, char *err, size_t err_len)
+{
+    size_t want = L->row_bytes * (size_t)n, packed = le32(data);
+    unsigned char *raw;
+    enum lzf_result r;
+    long i;
+    int k;
+    raw = malloc(want);
+    if (!raw) {
+        snprintf(err, err_len, "out of memory for %zu bytes", want);
+        return -1;
+    }
+    r = lzf_decode((const unsigned char *)data + 8, packed, raw, want);
+    if (r != LZF_OK) {
+        snprintf(err, err_len, "binary_compressed data: %s",
+                 lzf_result_text(r));
+        free(raw);
+        return -1;
+    }
+    for (i = 0; i < n; i++) {
+        for (k = 0; k < 3; k++) {
+            const unsigned char *v = raw + L->offset[k] * (size_t)n;
+            if (L->is_double[k]) {
+                double d;
+                memcpy(&d, v + (size_t)i * sizeof d, sizeof d);
+                xyz[3 * i + k] = d;
+            } else {
+                float f;
+                memcpy(&f, v + (size_t)i * sizeof f, sizeof f);
+                xyz[3 * i + k] = f;
+            }
+        }
+        if (check_point(xyz + 3 * i, i, err, err_len)) {
+            free(raw);
+            return -1;
+        }
+    }
+    free(raw);
+    return 0;
+}
+
 static int read_ascii(const char *buf, size_t len, size_t pos,
                       const struct xyz_layout *L, long n, double *xyz,
                       char *err, size_t err_len)
@@ -324,24 +432,30 @@ int pcd_parse(const char *buf, size_t len, double **xyz_out, long *n_out,
     n = h.points;
     if (n == 0)
         return 0;
-    if (h.binary && L.row_bytes * (size_t)n > len - pos) {
+    if (h.data == PCD_BINARY && L.row_bytes * (size_t)n > len - pos) {
         snprintf(err, err_len,
                  "binary data truncated: %ld points need %zu "
                  "bytes, file has %zu",
                  n, (size_t)n * L.row_bytes, len - pos);
         return -1;
     }
-    if (!h.binary && (size_t)n > len - pos) { /* each point needs a byte */
+    if (h.data == PCD_ASCII && (size_t)n > len - pos) { /* a byte a point */
         snprintf(err, err_len, "ascii data truncated: POINTS %ld", n);
         return -1;
     }
+    if (h.data == PCD_BINARY_COMPRESSED &&
+        check_compressed_sizes(buf + pos, len - pos, &L, n, err, err_len))
+        return -1;
     xyz = malloc((size_t)n * 3 * sizeof *xyz);
     if (!xyz) {
         snprintf(err, err_len, "out of memory for %ld points", n);
         return -1;
     }
-    if (h.binary ? read_binary(buf + pos, len - pos, &L, n, xyz, err, err_len)
-                 : read_ascii(buf, len, pos, &L, n, xyz, err, err_len)) {
+    if (h.data == PCD_BINARY_COMPRESSED
+            ? read_compressed(buf + pos, &L, n, xyz, err, err_len)
+        : h.data == PCD_BINARY
+            ? read_binary(buf + pos, len - pos, &L, n, xyz, err, err_len)
+            : read_ascii(buf, len, pos, &L, n, xyz, err, err_len)) {
         free(xyz);
         return -1;
     }

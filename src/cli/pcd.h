@@ -1,5 +1,5 @@
-/* Reader for the Point Cloud Library's PCD files (v0.7, DATA ascii or
- * binary): the x y z fields of every point, in metres. */
+/* Reader for the Point Cloud Library's PCD files (v0.7, DATA ascii, binary
+ * or binary_compressed): the x y z fields of every point, in metres. */
 #ifndef QRT_CLI_PCD_H
 #define QRT_CLI_PCD_H
 

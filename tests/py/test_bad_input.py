@@ -103,7 +103,7 @@ def scene_with_pcd(tmp_path, payload):
     (pcd_header(2, "ascii") + b"0 0 0\nnan 0 0\n", ["not finite"]),
     (pcd_header(1) + struct.pack("<3f", 0.0, math.inf, 0.0), ["not finite"]),
     (pcd_header(4, width=3) + b"\0" * 48, ["POINTS"]),
-    (pcd_header(1, "binary_compressed") + b"\0" * 12, ["not supported"]),
+    (pcd_header(1, "binary_lz4") + b"\0" * 12, ["not supported"]),
     (pcd_header(1, fields="x y", size="4 4", type_="F F", count="1 1") + b"\0" * 8,
      ["x, y and z"]),
     (b"hello world\n", ["header"]),
@@ -111,6 +111,59 @@ def scene_with_pcd(tmp_path, payload):
 ])
 def test_malformed_pcd(qrtplan, tmp_path, payload, words):
     expect_error(scene_with_pcd(tmp_path, payload), *words)
+
+
+def lzf_pcd(n, packed, stated, stream):
+    """A binary_compressed PCD of n x y z points: the two sizes as stated,
+    then the LZF stream as given."""
+    return pcd_header(n, "binary_compressed") + struct.pack("<II", packed, stated) + stream
+
+
+ONE_POINT = struct.pack("<3f", 0.6, 0.0, 0.0)
+
+
+@pytest.mark.parametrize("payload,words", [
+    (pcd_header(1, "binary_compressed") + b"\0" * 4, ["no sizes"]),
+    (lzf_pcd(1, 13, 24, b"\x0b" + ONE_POINT), ["says 24 bytes", "are 12"]),
+    (lzf_pcd(1, 100, 12, b"\x0b" + ONE_POINT), ["truncated", "100 bytes"]),
+    # a stated size the file cannot hold is refused before it is allocated
+    (lzf_pcd(1_000_000, 13, 12_000_000, b"\x0b" + ONE_POINT),
+     ["13 bytes cannot expand to 12000000"]),
+    (lzf_pcd(100_000_000, 13, 1_200_000_000, b"\x0b" + ONE_POINT),
+     ["more than 1 GiB"]),
+    # the stream itself: a literal cut short, a reference before the start,
+    # more or less than the stated size, a NaN inside
+    (lzf_pcd(1, 6, 12, b"\x0b" + ONE_POINT[:5]), ["ends inside a run"]),
+    (lzf_pcd(1, 4, 12, b"\x20\x00" + b"\x09\x00"), ["refers back before"]),
+    (lzf_pcd(1, 15, 12, b"\x0b" + ONE_POINT + b"\x00\x00"),
+     ["more than its stated size"]),
+    (lzf_pcd(1, 12, 12, b"\x0a" + ONE_POINT[:11]), ["less than its stated"]),
+    (lzf_pcd(1, 13, 12, b"\x0b" + struct.pack("<3f", 0.6, math.nan, 0.0)),
+     ["point 0 is not finite"]),
+])
+def test_malformed_binary_compressed_pcd(qrtplan, tmp_path, payload, words):
+    expect_error(scene_with_pcd(tmp_path, payload), *words)
+
+
+def test_binary_compressed_pcd_by_hand(qrtplan, tmp_path):
+    """Two points, the second a back reference to the first (LZF's copy
+    that overlaps what it writes): x x ... then y y ... then z z."""
+    soa = struct.pack("<2f", 0.6, 0.6) + struct.pack("<2f", 0.1, 0.1) + \
+        struct.pack("<2f", 0.0, 0.0)
+    assert soa[:4] == soa[4:8]
+    # literal 4 bytes, then copy 4 from 4 back; y and z likewise
+    stream = b"".join(b"\x03" + soa[i:i + 4] + b"\x40\x03" for i in (0, 8, 16))
+    write(tmp_path, lzf_pcd(2, len(stream), 24, stream), "cloud.pcd")
+    code, plan, err = plan_scene(with_(points=None, points_file="cloud.pcd"),
+                                 tmp_path)
+    assert code == 0, err
+    assert plan["stats"]["points"] == 2
+    inline = [[0.6, 0.1, 0.0], [0.6, 0.1, 0.0]]
+    code2, plan2, err2 = plan_scene(with_(points=[[float(np.float32(v)) for v in p]
+                                                  for p in inline]), tmp_path,
+                                    name="inline")
+    assert code2 == 0, err2
+    assert plan["stats"]["cells_blocked"] == plan2["stats"]["cells_blocked"] > 0
 
 
 def test_pcd_with_extra_fields_ascii_and_binary(qrtplan, tmp_path):
