@@ -99,3 +99,22 @@ def test_binary_compressed_reads_as_the_same_cloud(qrtplan, tmp_path, name,
         sc = json.loads(scene(tmp_path, "check", "packed.pcd").read_text())
         r = oracle.check_path(sc, plan, oracle.scene_points(sc, str(tmp_path)))
         assert r.safe, str(r)
+
+
+def test_an_organised_cloud_with_nan_pixels_is_refused_with_the_remedy(
+        qrtplan, tmp_path):
+    """A depth camera's organised cloud marks pixels without a return with
+    NaN (is_dense false). design.md has the reader refuse NaN; the message
+    says where and what to do."""
+    rng = np.random.default_rng(7)
+    xyz = rng.uniform(0.3, 0.6, (4 * 6, 3)).astype(np.float32)
+    xyz[9] = np.nan
+    pc = PointCloud.from_xyz_points(xyz)
+    pc.metadata.width, pc.metadata.height = 6, 4
+    pc.save(str(tmp_path / "organised.pcd"), encoding=Encoding.BINARY_COMPRESSED)
+    assert b"WIDTH 6\nHEIGHT 4\n" in (tmp_path / "organised.pcd").read_bytes()
+    r = run_cli(["plan", scene(tmp_path, "organised", "organised.pcd")])
+    assert r.returncode == 2 and r.stdout == ""
+    assert r.stderr.count("\n") == 1
+    assert "point 9 is not finite" in r.stderr
+    assert "removeNaNFromPointCloud" in r.stderr
