@@ -45,6 +45,9 @@ static const char help[] =
     "       stats.time_us is this run's wall clock; in a fresh process its\n"
     "       total is mostly the first touch of the planner's ~4 MB state\n"
     "       (compare builds with tools/bench.sh, not with it).\n"
+    "       SCENE.json '-' reads the scene from standard input (its\n"
+    "       points_file then relative to the working directory); '-o -'\n"
+    "       writes to standard output, in every command.\n"
     "mask   Write the scene's blocked lattice nodes as JSON (index =\n"
     "       (ia*ns + is)*ne + ie; node joints = lo_deg + i*grid_deg).\n"
     "gen    Write a scene of the paper's obstacle family (its Eq. 13, Fig. "
@@ -83,6 +86,24 @@ static FILE *open_output(const char *path)
     return path ? fopen(path, "w") : stdout;
 }
 
+/* "-o -" is standard output, as no -o is */
+static const char *output_path(const char *arg)
+{
+    return strcmp(arg, "-") == 0 ? NULL : arg;
+}
+
+/* a scene path, or "-" for standard input */
+static int is_scene_arg(const char *arg)
+{
+    return arg[0] != '-' || strcmp(arg, "-") == 0;
+}
+
+/* what messages call the scene */
+static const char *scene_name(const char *path)
+{
+    return strcmp(path, "-") == 0 ? "standard input" : path;
+}
+
 static int close_output(FILE *f, const char *path)
 {
     int bad = ferror(f);
@@ -104,14 +125,15 @@ static int prepare(const char *path, struct scene *sc, int use_astar,
     char err[512];
     long t0;
     int rc;
+    const char *name = scene_name(path);
     if (scene_load(path, sc, err, sizeof err))
-        return fail(path, err);
+        return fail(name, err);
     sc->params.use_astar = use_astar;
     sc->params.simplify = simplify;
     rc = qrt_planner_init(&planner, &sc->params);
     if (rc != QRT_OK) {
         scene_free(sc);
-        return fail(path, rc == QRT_E_TOO_BIG
+        return fail(name, rc == QRT_E_TOO_BIG
                               ? "lattice larger than this build's tables "
                                 "(coarser grid_deg or narrower limits)"
                               : "invalid arm, margins or grid_deg (alpha "
@@ -120,7 +142,7 @@ static int prepare(const char *path, struct scene *sc, int use_astar,
     t0 = now_us();
     if (qrt_planner_add_points(&planner, sc->points, sc->n_points) != QRT_OK) {
         scene_free(sc);
-        return fail(path, "obstacle points must be finite");
+        return fail(name, "obstacle points must be finite");
     }
     if (build_mask)
         qrt_planner_build_mask(&planner);
@@ -139,14 +161,14 @@ static int cmd_plan(int argc, char **argv)
     FILE *out;
     for (i = 0; i < argc; i++) {
         if (strcmp(argv[i], "-o") == 0 && i + 1 < argc)
-            out_path = argv[++i];
+            out_path = output_path(argv[++i]);
         else if (strcmp(argv[i], "--dijkstra") == 0)
             use_astar = 0;
         else if (strcmp(argv[i], "--no-simplify") == 0)
             simplify = 0;
         else if (strcmp(argv[i], "--as-read") == 0)
             as_read = 1;
-        else if (argv[i][0] != '-' && !scene_path)
+        else if (is_scene_arg(argv[i]) && !scene_path)
             scene_path = argv[i];
         else
             return fail(NULL, "plan: unexpected argument (see --help)");
@@ -162,7 +184,7 @@ static int cmd_plan(int argc, char **argv)
     t.search_us = now_us() - t1;
     scene_free(&sc);
     if (rc != QRT_OK)
-        return fail(scene_path, qrt_err_name(rc));
+        return fail(scene_name(scene_path), qrt_err_name(rc));
     out = open_output(out_path);
     if (!out)
         return fail(out_path, "cannot open for writing");
@@ -180,8 +202,8 @@ static int cmd_mask(int argc, char **argv)
     FILE *out;
     for (i = 0; i < argc; i++) {
         if (strcmp(argv[i], "-o") == 0 && i + 1 < argc)
-            out_path = argv[++i];
-        else if (argv[i][0] != '-' && !scene_path)
+            out_path = output_path(argv[++i]);
+        else if (is_scene_arg(argv[i]) && !scene_path)
             scene_path = argv[i];
         else
             return fail(NULL, "mask: unexpected argument (see --help)");
@@ -323,7 +345,7 @@ static int cmd_gen(int argc, char **argv)
             ok = parse_triple(v, a[2] == 's' ? start : goal),
             need = "three finite degrees A,S,E";
         else if (strcmp(a, "-o") == 0)
-            out_path = v;
+            out_path = output_path(v);
         else if (strcmp(a, "--pcd") == 0 || strcmp(a, "--pcd-ascii") == 0) {
             pcd_path = v;
             pcd_ascii = a[5] == '-';

@@ -17,9 +17,13 @@
 int read_whole_file(const char *path, char **buf, size_t *len, char *err,
                     size_t err_len)
 {
-    FILE *f = fopen(path, "rb");
+    /* "-": standard input, as a pipe gives it */
+    int from_stdin = strcmp(path, "-") == 0;
+    FILE *f = from_stdin ? stdin : fopen(path, "rb");
     size_t cap = 1 << 16, n = 0;
     char *b;
+    if (from_stdin)
+        path = "standard input";
     if (!f) {
         snprintf(err, err_len, "cannot open %s: %s", path, strerror(errno));
         return -1;
@@ -34,7 +38,8 @@ int read_whole_file(const char *path, char **buf, size_t *len, char *err,
             snprintf(err, err_len, "%s is larger than %d MiB", path,
                      SCENE_MAX_FILE_BYTES >> 20);
             free(b);
-            fclose(f);
+            if (!from_stdin)
+                fclose(f);
             return -1;
         }
         cap *= 2;
@@ -51,10 +56,12 @@ int read_whole_file(const char *path, char **buf, size_t *len, char *err,
     if (!b || ferror(f)) {
         snprintf(err, err_len, "cannot read %s", path);
         free(b);
-        fclose(f);
+        if (!from_stdin)
+            fclose(f);
         return -1;
     }
-    fclose(f);
+    if (!from_stdin)
+        fclose(f);
     b[n] = '\0';
     *buf = b;
     *len = n;

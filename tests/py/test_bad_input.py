@@ -268,3 +268,41 @@ def test_help_that_cannot_be_written_is_an_error(qrtplan, program, flag):
                            stderr=subprocess.PIPE, text=True, timeout=30)
     assert r.returncode == 2
     assert r.stderr == f"{program}: stdout: write failed\n"
+
+
+def test_scene_from_standard_input_and_plan_to_standard_output(qrtplan,
+                                                              tmp_path):
+    """'-' as the scene reads standard input (a points_file then relative to
+    the working directory); '-o -' writes standard output."""
+    write(tmp_path, pcd_header(1) + struct.pack("<3f", 0.6, 0.0, 0.0),
+          "cloud.pcd")
+    scene = json.dumps(with_(points=None, points_file="cloud.pcd"))
+    by_file = run_cli(["plan", write(tmp_path, scene)])
+    assert by_file.returncode == 0, by_file.stderr
+
+    def piped(*args, text=scene, cwd=tmp_path):
+        return subprocess.run([str(qrtplan), *args], input=text, cwd=cwd,
+                              capture_output=True, text=True, timeout=60)
+
+    def untimed(out):
+        plan = json.loads(out)
+        del plan["stats"]["time_us"]
+        return plan
+
+    for args in (["plan", "-"], ["plan", "-", "-o", "-"], ["plan", "-o", "-", "-"]):
+        r = piped(*args)
+        assert r.returncode == 0, (args, r.stderr)
+        assert untimed(r.stdout) == untimed(by_file.stdout), args
+    assert untimed(by_file.stdout)["stats"]["points"] == 1
+    r = piped("mask", "-", "-o", "-")
+    assert r.returncode == 0 and json.loads(r.stdout)["blocked"], r.stderr
+    # elsewhere the points_file is not there, and the message says whose
+    r = piped("plan", "-", cwd=tmp_path.parent)
+    assert r.returncode == 2 and r.stderr.startswith(
+        "qrtplan: standard input: ") and "cloud.pcd" in r.stderr, r.stderr
+    r = piped("plan", "-", text="")
+    assert r.returncode == 2 and r.stderr == (
+        "qrtplan: standard input: malformed JSON at byte 0: unexpected end "
+        "of input\n"), r.stderr
+    r = piped("plan", "-", "-")
+    assert r.returncode == 2 and "unexpected argument" in r.stderr
