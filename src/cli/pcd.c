@@ -234,6 +234,20 @@ static int check_point(const double *p, long i, char *err, size_t err_len)
     return -1;
 }
 
+/* One coordinate as stored: a float32 or a float64, at any alignment. */
+static double load_coordinate(const void *at, int is_double)
+{
+    if (is_double) {
+        double v;
+        memcpy(&v, at, sizeof v);
+        return v;
+    } else {
+        float v;
+        memcpy(&v, at, sizeof v);
+        return v;
+    }
+}
+
 static int read_binary(const char *data, size_t avail,
                        const struct xyz_layout *L, long n, double *xyz,
                        char *err, size_t err_len)
@@ -249,17 +263,9 @@ static int read_binary(const char *data, size_t avail,
     }
     for (i = 0; i < n; i++) {
         const char *row = data + (size_t)i * L->row_bytes;
-        for (k = 0; k < 3; k++) {
-            if (L->is_double[k]) {
-                double v;
-                memcpy(&v, row + L->offset[k], sizeof v);
-                xyz[3 * i + k] = v;
-            } else {
-                float v;
-                memcpy(&v, row + L->offset[k], sizeof v);
-                xyz[3 * i + k] = v;
-            }
-        }
+        for (k = 0; k < 3; k++)
+            xyz[3 * i + k] =
+                load_coordinate(row + L->offset[k], L->is_double[k]);
         if (check_point(xyz + 3 * i, i, err, err_len))
             return -1;
     }
@@ -344,16 +350,10 @@ static int read_compressed(const char *data, const struct xyz_layout *L, long n,
     }
     for (i = 0; i < n; i++) {
         for (k = 0; k < 3; k++) {
-            const unsigned char *v = raw + L->offset[k] * (size_t)n;
-            if (L->is_double[k]) {
-                double d;
-                memcpy(&d, v + (size_t)i * sizeof d, sizeof d);
-                xyz[3 * i + k] = d;
-            } else {
-                float f;
-                memcpy(&f, v + (size_t)i * sizeof f, sizeof f);
-                xyz[3 * i + k] = f;
-            }
+            size_t width = L->is_double[k] ? 8 : 4;
+            xyz[3 * i + k] = load_coordinate(raw + L->offset[k] * (size_t)n +
+                                                 (size_t)i * width,
+                                             L->is_double[k]);
         }
         if (check_point(xyz + 3 * i, i, err, err_len)) {
             free(raw);

@@ -18,7 +18,7 @@ int read_whole_file(const char *path, char **buf, size_t *len, char *err,
                     size_t err_len)
 {
     /* "-": standard input, as a pipe gives it */
-    int from_stdin = strcmp(path, "-") == 0;
+    int from_stdin = strcmp(path, "-") == 0, failed = 0;
     FILE *f = from_stdin ? stdin : fopen(path, "rb");
     size_t cap = 1 << 16, n = 0;
     char *b;
@@ -37,10 +37,8 @@ int read_whole_file(const char *path, char **buf, size_t *len, char *err,
         if (cap >= SCENE_MAX_FILE_BYTES) {
             snprintf(err, err_len, "%s is larger than %d MiB", path,
                      SCENE_MAX_FILE_BYTES >> 20);
-            free(b);
-            if (!from_stdin)
-                fclose(f);
-            return -1;
+            failed = 1;
+            break;
         }
         cap *= 2;
         {
@@ -53,15 +51,16 @@ int read_whole_file(const char *path, char **buf, size_t *len, char *err,
             }
         }
     }
-    if (!b || ferror(f)) {
+    if (!failed && (!b || ferror(f))) {
         snprintf(err, err_len, "cannot read %s", path);
-        free(b);
-        if (!from_stdin)
-            fclose(f);
-        return -1;
+        failed = 1;
     }
     if (!from_stdin)
         fclose(f);
+    if (failed) {
+        free(b);
+        return -1;
+    }
     b[n] = '\0';
     *buf = b;
     *len = n;
