@@ -7,8 +7,9 @@
 #   3. the core's C tests cross-built for armhf and aarch64, run under
 #      qemu-user, with the paper's scenes planned exactly as on the host,
 #   4. the core cross-built for a Cortex-M7, and bare-metal Cortex-M7 images
-#      (ports/mps2-an500) running the core's tests and the Table 4 plan on
-#      qemu-system-arm, the plan compared with the host's bit for bit,
+#      (ports/mps2-an500) running the core's tests, the Table 4 plan and
+#      the servo side's tests (codec, drive firmware, CiA 402 master) on
+#      qemu-system-arm, compared with the host's bit for bit,
 #   5. the README's memory table checked against the built objects,
 #   6. the libFuzzer targets (scene/PCD readers, CAN frames, LCM messages).
 # Ends with one "N passed, M failed" line; exits non-zero on any failure.
@@ -90,7 +91,7 @@ else
     failed=$((failed + 1))
 fi
 
-echo "== Cortex-M7 bare metal (qemu-system-arm -M mps2-an500): core tests, Table 4 plan"
+echo "== Cortex-M7 bare metal (qemu-system-arm -M mps2-an500): core tests, Table 4 plan, the servo side's tests"
 if ports/mps2-an500/run.sh build/bin/qrtplan; then
     passed=$((passed + 1))
 else

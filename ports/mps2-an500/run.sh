@@ -7,7 +7,10 @@
 #     profile bit for bit (status, blocked cells, expansions and every
 #     waypoint; the cost to the 1e-6 degree the host's JSON gives), for the
 #     paper (5 deg) and the small (10 deg) profile;
-#     the small image links into 512 KiB of RAM with its stack, or fails.
+#     the small image links into 512 KiB of RAM with its stack, or fails;
+#   - the servo side's unit tests (the CANopen codec, the drive firmware
+#     and the CiA 402 master driving three drives on a bus in memory) pass
+#     on the board and print what the host's print, figure for figure.
 # Usage: ports/mps2-an500/run.sh [HOST_QRTPLAN]   (default build/bin/qrtplan)
 set -uo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
@@ -27,6 +30,18 @@ run_image() { # elf log -> exit status of the program
     timeout "${QRT_MPS2_TIMEOUT:-1400}" "$qemu" -M mps2-an500 -nographic \
         -monitor none -serial none \
         -semihosting-config enable=on,target=native -kernel "$1" >"$2" 2>&1
+}
+
+# The servo side's tests run whole on the board, so they must print what
+# the host's print (the master's measured distances and speeds included);
+# the core's run a twentieth of their cases there and are not compared.
+same_as_host() { # name log
+    case $1 in test_can_codec | test_servo_drive | test_master) ;; *) return 0 ;; esac
+    local host_test
+    host_test="$(dirname "$host")/$1"
+    [ -x "$host_test" ] || { echo "mps2: no host $host_test to compare with"; return 1; }
+    "$host_test" 2>&1 | diff - "$2" >"$2.diff" ||
+        { echo "mps2 $1: the board's output differs from the host's:"; cat "$2.diff"; return 1; }
 }
 
 # the host's plans: the paper profile with the main build, the small one
@@ -117,7 +132,8 @@ PY
     for elf in "$out/$profile"/test_*.elf; do
         name=$(basename "$elf" .elf)
         start=$(date +%s.%N)
-        if run_image "$elf" "$out/$profile/$name.log"; then
+        if run_image "$elf" "$out/$profile/$name.log" &&
+            same_as_host "$name" "$out/$profile/$name.log"; then
             echo "ok   mps2 $name: $(tail -1 "$out/$profile/$name.log")" \
                 "($(python3 -c "print(f'{$(date +%s.%N) - $start:.1f}')") s)"
         else
