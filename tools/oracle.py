@@ -161,6 +161,8 @@ def read_pcd(path):
         # liblzf's own decoder (python-neo-lzf), not the planner's; the
         # rows come field by field: every point's first field, then the next
         import lzf
+        if len(data) < pos + 8:
+            raise ValueError(f"{path}: binary_compressed data without its sizes")
         packed, unpacked = struct.unpack_from("<II", data, pos)
         raw = lzf.decompress(data[pos + 8:pos + 8 + packed], unpacked)
         if raw is None or len(raw) != unpacked or unpacked != n * dtype.itemsize:

@@ -129,6 +129,15 @@ def test_command_line_says_it_cannot_check_with_exit_2(tmp_path):
     array.write_text("[1, 2]")
     no_start = tmp_path / "no_start.json"
     no_start.write_text(json.dumps({"points": [[0.0, -0.5, 0.5]]}))
+    # binary_compressed clouds cut short, before and inside the LZF stream
+    head = (b"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+            b"WIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA binary_compressed\n")
+    cut = []
+    for i, tail in enumerate((b"\x01", b"\x0d\x00\x00\x00\x0c\x00\x00\x00\x0b\x00")):
+        (tmp_path / f"cut{i}.pcd").write_bytes(head + tail)
+        cut.append(tmp_path / f"cut{i}.json")
+        cut[-1].write_text(json.dumps({**scene([[0.0, -0.5, 0.5]]),
+                                       "points_file": f"cut{i}.pcd"}))
 
     def run(*args):
         return subprocess.run([sys.executable, oracle.__file__, *map(str, args)],
@@ -138,7 +147,8 @@ def test_command_line_says_it_cannot_check_with_exit_2(tmp_path):
     assert r.returncode == 0 and r.stdout.startswith("safe"), r.stderr
     for args in ((good_scene, broken), (broken, good_plan),
                  (good_scene, tmp_path / "missing.json"), (good_scene, array),
-                 (no_start, good_plan), (good_scene,)):
+                 (no_start, good_plan), (good_scene,),
+                 *((c, good_plan) for c in cut)):
         r = run(*args)
         assert r.returncode == 2, (args, r.stdout, r.stderr)
         assert "Traceback" not in r.stderr
