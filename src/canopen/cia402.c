@@ -1,5 +1,6 @@
 #include "qrtcan/cia402.h"
 
+#include <stddef.h>
 #include <string.h>
 
 enum qrtcan_402_state qrtcan_402_state_from_statusword(uint16_t sw)
@@ -80,6 +81,67 @@ enum qrtcan_402_cmd qrtcan_402_command(uint16_t prev_cw, uint16_t cw)
     return QRTCAN_402_CMD_ENABLE_OPERATION; /* x111 1 is all that is left */
 }
 
+/* The transitions out of each state that takes more than one command, a
+ * function each (a switch inside a switch clause leaves that clause without
+ * its break, MISRA C:2012 rule 16.3). */
+static enum qrtcan_402_state from_ready_to_switch_on(enum qrtcan_402_cmd cmd)
+{
+    switch (cmd) {
+    case QRTCAN_402_CMD_SWITCH_ON:
+        return QRTCAN_402_SWITCHED_ON;
+    case QRTCAN_402_CMD_ENABLE_OPERATION: /* 3 then 4 at once */
+        return QRTCAN_402_OPERATION_ENABLED;
+    case QRTCAN_402_CMD_DISABLE_VOLTAGE:
+    case QRTCAN_402_CMD_QUICK_STOP:
+        return QRTCAN_402_SWITCH_ON_DISABLED;
+    default:
+        return QRTCAN_402_READY_TO_SWITCH_ON;
+    }
+}
+
+static enum qrtcan_402_state from_switched_on(enum qrtcan_402_cmd cmd)
+{
+    switch (cmd) {
+    case QRTCAN_402_CMD_ENABLE_OPERATION:
+        return QRTCAN_402_OPERATION_ENABLED;
+    case QRTCAN_402_CMD_SHUTDOWN:
+        return QRTCAN_402_READY_TO_SWITCH_ON;
+    case QRTCAN_402_CMD_DISABLE_VOLTAGE:
+    case QRTCAN_402_CMD_QUICK_STOP:
+        return QRTCAN_402_SWITCH_ON_DISABLED;
+    default:
+        return QRTCAN_402_SWITCHED_ON;
+    }
+}
+
+static enum qrtcan_402_state from_operation_enabled(enum qrtcan_402_cmd cmd)
+{
+    switch (cmd) {
+    case QRTCAN_402_CMD_SWITCH_ON:
+        return QRTCAN_402_SWITCHED_ON;
+    case QRTCAN_402_CMD_SHUTDOWN:
+        return QRTCAN_402_READY_TO_SWITCH_ON;
+    case QRTCAN_402_CMD_DISABLE_VOLTAGE:
+        return QRTCAN_402_SWITCH_ON_DISABLED;
+    case QRTCAN_402_CMD_QUICK_STOP:
+        return QRTCAN_402_QUICK_STOP_ACTIVE;
+    default:
+        return QRTCAN_402_OPERATION_ENABLED;
+    }
+}
+
+static enum qrtcan_402_state from_quick_stop_active(enum qrtcan_402_cmd cmd)
+{
+    switch (cmd) {
+    case QRTCAN_402_CMD_DISABLE_VOLTAGE:
+        return QRTCAN_402_SWITCH_ON_DISABLED;
+    case QRTCAN_402_CMD_ENABLE_OPERATION:
+        return QRTCAN_402_OPERATION_ENABLED;
+    default:
+        return QRTCAN_402_QUICK_STOP_ACTIVE;
+    }
+}
+
 enum qrtcan_402_state qrtcan_402_transition(enum qrtcan_402_state st,
                                             enum qrtcan_402_cmd cmd)
 {
@@ -88,56 +150,51 @@ enum qrtcan_402_state qrtcan_402_transition(enum qrtcan_402_state st,
         return cmd == QRTCAN_402_CMD_SHUTDOWN ? QRTCAN_402_READY_TO_SWITCH_ON
                                               : st;
     case QRTCAN_402_READY_TO_SWITCH_ON:
-        switch (cmd) {
-        case QRTCAN_402_CMD_SWITCH_ON:
-            return QRTCAN_402_SWITCHED_ON;
-        case QRTCAN_402_CMD_ENABLE_OPERATION: /* 3 then 4 at once */
-            return QRTCAN_402_OPERATION_ENABLED;
-        case QRTCAN_402_CMD_DISABLE_VOLTAGE:
-        case QRTCAN_402_CMD_QUICK_STOP:
-            return QRTCAN_402_SWITCH_ON_DISABLED;
-        default:
-            return st;
-        }
+        return from_ready_to_switch_on(cmd);
     case QRTCAN_402_SWITCHED_ON:
-        switch (cmd) {
-        case QRTCAN_402_CMD_ENABLE_OPERATION:
-            return QRTCAN_402_OPERATION_ENABLED;
-        case QRTCAN_402_CMD_SHUTDOWN:
-            return QRTCAN_402_READY_TO_SWITCH_ON;
-        case QRTCAN_402_CMD_DISABLE_VOLTAGE:
-        case QRTCAN_402_CMD_QUICK_STOP:
-            return QRTCAN_402_SWITCH_ON_DISABLED;
-        default:
-            return st;
-        }
+        return from_switched_on(cmd);
     case QRTCAN_402_OPERATION_ENABLED:
-        switch (cmd) {
-        case QRTCAN_402_CMD_SWITCH_ON:
-            return QRTCAN_402_SWITCHED_ON;
-        case QRTCAN_402_CMD_SHUTDOWN:
-            return QRTCAN_402_READY_TO_SWITCH_ON;
-        case QRTCAN_402_CMD_DISABLE_VOLTAGE:
-            return QRTCAN_402_SWITCH_ON_DISABLED;
-        case QRTCAN_402_CMD_QUICK_STOP:
-            return QRTCAN_402_QUICK_STOP_ACTIVE;
-        default:
-            return st;
-        }
+        return from_operation_enabled(cmd);
     case QRTCAN_402_QUICK_STOP_ACTIVE:
-        switch (cmd) {
-        case QRTCAN_402_CMD_DISABLE_VOLTAGE:
-            return QRTCAN_402_SWITCH_ON_DISABLED;
-        case QRTCAN_402_CMD_ENABLE_OPERATION:
-            return QRTCAN_402_OPERATION_ENABLED;
-        default:
-            return st;
-        }
+        return from_quick_stop_active(cmd);
     case QRTCAN_402_FAULT:
         return cmd == QRTCAN_402_CMD_FAULT_RESET ? QRTCAN_402_SWITCH_ON_DISABLED
                                                  : st;
     default:
         return st;
+    }
+}
+
+/* The next command on the way to Operation Enabled, and to Switched On. */
+static uint16_t toward_operation_enabled(enum qrtcan_402_state st)
+{
+    switch (st) {
+    case QRTCAN_402_SWITCH_ON_DISABLED:
+        return QRTCAN_CW_CMD_SHUTDOWN;
+    case QRTCAN_402_READY_TO_SWITCH_ON:
+        return QRTCAN_CW_CMD_SWITCH_ON;
+    case QRTCAN_402_SWITCHED_ON:
+    case QRTCAN_402_OPERATION_ENABLED:
+        return QRTCAN_CW_CMD_ENABLE_OPERATION;
+    default:
+        /* Quick Stop Active goes round by Switch On Disabled: after a
+         * quick stop the master should pass through every state again
+         * rather than re-enable with transition 16 */
+        return QRTCAN_CW_CMD_DISABLE_VOLTAGE;
+    }
+}
+
+static uint16_t toward_switched_on(enum qrtcan_402_state st)
+{
+    switch (st) {
+    case QRTCAN_402_SWITCH_ON_DISABLED:
+        return QRTCAN_CW_CMD_SHUTDOWN;
+    case QRTCAN_402_READY_TO_SWITCH_ON:
+    case QRTCAN_402_SWITCHED_ON:
+    case QRTCAN_402_OPERATION_ENABLED:
+        return QRTCAN_CW_CMD_SWITCH_ON;
+    default:
+        return QRTCAN_CW_CMD_DISABLE_VOLTAGE;
     }
 }
 
@@ -151,31 +208,9 @@ uint16_t qrtcan_402_controlword_toward(enum qrtcan_402_state st,
     }
     switch (target) {
     case QRTCAN_402_OPERATION_ENABLED:
-        switch (st) {
-        case QRTCAN_402_SWITCH_ON_DISABLED:
-            return QRTCAN_CW_CMD_SHUTDOWN;
-        case QRTCAN_402_READY_TO_SWITCH_ON:
-            return QRTCAN_CW_CMD_SWITCH_ON;
-        case QRTCAN_402_SWITCHED_ON:
-        case QRTCAN_402_OPERATION_ENABLED:
-            return QRTCAN_CW_CMD_ENABLE_OPERATION;
-        default:
-            /* Quick Stop Active goes round by Switch On Disabled: after a
-             * quick stop the master should pass through every state again
-             * rather than re-enable with transition 16 */
-            return QRTCAN_CW_CMD_DISABLE_VOLTAGE;
-        }
+        return toward_operation_enabled(st);
     case QRTCAN_402_SWITCHED_ON:
-        switch (st) {
-        case QRTCAN_402_SWITCH_ON_DISABLED:
-            return QRTCAN_CW_CMD_SHUTDOWN;
-        case QRTCAN_402_READY_TO_SWITCH_ON:
-        case QRTCAN_402_SWITCHED_ON:
-        case QRTCAN_402_OPERATION_ENABLED:
-            return QRTCAN_CW_CMD_SWITCH_ON;
-        default:
-            return QRTCAN_CW_CMD_DISABLE_VOLTAGE;
-        }
+        return toward_switched_on(st);
     case QRTCAN_402_READY_TO_SWITCH_ON:
         return st == QRTCAN_402_QUICK_STOP_ACTIVE ||
                        st == QRTCAN_402_FAULT_REACTION_ACTIVE
@@ -246,7 +281,7 @@ static int pdo_decode(const struct qrtcan_frame *f, uint32_t fn, unsigned *node,
 int qrtcan_402_rpdo_encode(unsigned node, const struct qrtcan_402_rpdo *p,
                            struct qrtcan_frame *f)
 {
-    if (p == 0 || f == 0) {
+    if (p == NULL || f == NULL) {
         return QRTCAN_E_ARG;
     }
     return pdo_encode(QRTCAN_FN_RPDO1, node, p->controlword, p->target_position,
@@ -256,7 +291,7 @@ int qrtcan_402_rpdo_encode(unsigned node, const struct qrtcan_402_rpdo *p,
 int qrtcan_402_rpdo_decode(const struct qrtcan_frame *f, unsigned *node,
                            struct qrtcan_402_rpdo *p)
 {
-    if (f == 0 || node == 0 || p == 0) {
+    if (f == NULL || node == NULL || p == NULL) {
         return QRTCAN_E_ARG;
     }
     return pdo_decode(f, QRTCAN_FN_RPDO1, node, &p->controlword,
@@ -266,7 +301,7 @@ int qrtcan_402_rpdo_decode(const struct qrtcan_frame *f, unsigned *node,
 int qrtcan_402_tpdo_encode(unsigned node, const struct qrtcan_402_tpdo *p,
                            struct qrtcan_frame *f)
 {
-    if (p == 0 || f == 0) {
+    if (p == NULL || f == NULL) {
         return QRTCAN_E_ARG;
     }
     return pdo_encode(QRTCAN_FN_TPDO1, node, p->statusword, p->position_actual,
@@ -276,7 +311,7 @@ int qrtcan_402_tpdo_encode(unsigned node, const struct qrtcan_402_tpdo *p,
 int qrtcan_402_tpdo_decode(const struct qrtcan_frame *f, unsigned *node,
                            struct qrtcan_402_tpdo *p)
 {
-    if (f == 0 || node == 0 || p == 0) {
+    if (f == NULL || node == NULL || p == NULL) {
         return QRTCAN_E_ARG;
     }
     return pdo_decode(f, QRTCAN_FN_TPDO1, node, &p->statusword,

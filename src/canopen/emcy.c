@@ -1,11 +1,12 @@
 #include "qrtcan/emcy.h"
 
+#include <stddef.h>
 #include <string.h>
 
 int qrtcan_emcy_encode(unsigned node, const struct qrtcan_emcy *e,
                        struct qrtcan_frame *f)
 {
-    if (f == 0 || e == 0) {
+    if (f == NULL || e == NULL) {
         return QRTCAN_E_ARG;
     }
     if (!qrtcan_node_valid(node)) {
@@ -23,7 +24,7 @@ int qrtcan_emcy_encode(unsigned node, const struct qrtcan_emcy *e,
 int qrtcan_emcy_decode(const struct qrtcan_frame *f, unsigned *node,
                        struct qrtcan_emcy *e)
 {
-    if (f == 0 || node == 0 || e == 0) {
+    if (f == NULL || node == NULL || e == NULL) {
         return QRTCAN_E_ARG;
     }
     if (f->id <= QRTCAN_FN_SYNC_EMCY || f->id > 0x0FFu) {

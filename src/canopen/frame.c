@@ -1,5 +1,7 @@
 #include "qrtcan/frame.h"
 
+#include <stddef.h>
+
 int qrtcan_node_valid(unsigned node)
 {
     return node >= QRTCAN_NODE_MIN && node <= QRTCAN_NODE_MAX;
@@ -54,7 +56,7 @@ int qrtcan_classify(const struct qrtcan_frame *f, enum qrtcan_kind *kind,
 {
     uint32_t fn;
     unsigned n;
-    if (f == 0 || kind == 0 || node == 0) {
+    if (f == NULL || kind == NULL || node == NULL) {
         return QRTCAN_E_ARG;
     }
     if (f->id > 0x7FFu) {

@@ -1,5 +1,6 @@
 #include "qrtcan/nmt.h"
 
+#include <stddef.h>
 #include <string.h>
 
 static int nmt_cmd_valid(unsigned c)
@@ -18,7 +19,7 @@ static int nmt_state_valid(unsigned s)
 int qrtcan_nmt_encode(enum qrtcan_nmt_cmd cmd, unsigned node,
                       struct qrtcan_frame *f)
 {
-    if (f == 0 || !nmt_cmd_valid((unsigned)cmd)) {
+    if (f == NULL || !nmt_cmd_valid((unsigned)cmd)) {
         return QRTCAN_E_ARG;
     }
     if (node != 0 && !qrtcan_node_valid(node)) {
@@ -35,7 +36,7 @@ int qrtcan_nmt_encode(enum qrtcan_nmt_cmd cmd, unsigned node,
 int qrtcan_nmt_decode(const struct qrtcan_frame *f, enum qrtcan_nmt_cmd *cmd,
                       unsigned *node)
 {
-    if (f == 0 || cmd == 0 || node == 0) {
+    if (f == NULL || cmd == NULL || node == NULL) {
         return QRTCAN_E_ARG;
     }
     if (f->id != 0) {
@@ -63,7 +64,7 @@ int qrtcan_nmt_addressed_to(unsigned target, unsigned node)
 int qrtcan_heartbeat_encode(unsigned node, enum qrtcan_nmt_state state,
                             struct qrtcan_frame *f)
 {
-    if (f == 0 || !nmt_state_valid((unsigned)state)) {
+    if (f == NULL || !nmt_state_valid((unsigned)state)) {
         return QRTCAN_E_ARG;
     }
     if (!qrtcan_node_valid(node)) {
@@ -80,7 +81,7 @@ int qrtcan_heartbeat_decode(const struct qrtcan_frame *f, unsigned *node,
                             enum qrtcan_nmt_state *state)
 {
     unsigned s;
-    if (f == 0 || node == 0 || state == 0) {
+    if (f == NULL || node == NULL || state == NULL) {
         return QRTCAN_E_ARG;
     }
     if (f->id <= QRTCAN_FN_HEARTBEAT || f->id > 0x77Fu) {

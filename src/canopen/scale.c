@@ -1,11 +1,16 @@
 #include "qrtcan/scale.h"
 
+#include <stddef.h>
+
 #include "qrtcan/frame.h"
 
 /* No libm: the codec must link on targets without it. A value is finite
  * when it equals itself (not NaN) and is inside the double range. */
 static int is_finite(double x)
 {
+    /* cppcheck takes the range test for always true: it knows no
+     * infinities, which are what it is there to turn away */
+    /* cppcheck-suppress incorrectLogicOperator */
     return x == x && x <= 1.7976931348623157e308 &&
            x >= -1.7976931348623157e308;
 }
@@ -14,7 +19,7 @@ int qrtcan_deg_to_counts(const struct qrtcan_scale *s, double deg,
                          int32_t *counts)
 {
     double c;
-    if (s == 0 || counts == 0 || !is_finite(s->counts_per_deg) ||
+    if (s == NULL || counts == NULL || !is_finite(s->counts_per_deg) ||
         s->counts_per_deg == 0.0) {
         return QRTCAN_E_ARG;
     }
@@ -33,7 +38,7 @@ int qrtcan_deg_to_counts(const struct qrtcan_scale *s, double deg,
 int qrtcan_counts_to_deg(const struct qrtcan_scale *s, int32_t counts,
                          double *deg)
 {
-    if (s == 0 || deg == 0 || !is_finite(s->counts_per_deg) ||
+    if (s == NULL || deg == NULL || !is_finite(s->counts_per_deg) ||
         s->counts_per_deg == 0.0) {
         return QRTCAN_E_ARG;
     }
@@ -45,7 +50,7 @@ int qrtcan_joints_to_counts(const struct qrtcan_scale s[3], const double deg[3],
                             int32_t counts[3])
 {
     int i, rc;
-    if (s == 0 || deg == 0 || counts == 0) {
+    if (s == NULL || deg == NULL || counts == NULL) {
         return QRTCAN_E_ARG;
     }
     for (i = 0; i < 3; i++) {
@@ -61,7 +66,7 @@ int qrtcan_counts_to_joints(const struct qrtcan_scale s[3],
                             const int32_t counts[3], double deg[3])
 {
     int i, rc;
-    if (s == 0 || deg == 0 || counts == 0) {
+    if (s == NULL || deg == NULL || counts == NULL) {
         return QRTCAN_E_ARG;
     }
     for (i = 0; i < 3; i++) {

@@ -1,5 +1,6 @@
 #include "qrtcan/sdo.h"
 
+#include <stddef.h>
 #include <string.h>
 
 /* Command specifiers: bits 7..5 of byte 0. */
@@ -30,10 +31,15 @@ static void get_mux(const struct qrtcan_frame *f, struct qrtcan_sdo *s)
     s->data = 0;
 }
 
+/* The low 1, 2 or 3 bytes of a 32-bit value, by size (a table: a shift by
+ * 8 * size would need its range proved to every checker). */
+static const uint32_t low_bytes[4] = {0xFFFFFFFFu, 0x000000FFu, 0x0000FFFFu,
+                                      0x00FFFFFFu};
+
 /* The value's bytes as the frame carries them: only `size` of them count. */
 static uint32_t masked(uint32_t v, unsigned size)
 {
-    return size == 0 || size >= 4 ? v : v & ((1u << (8 * size)) - 1u);
+    return size == 0 || size >= 4 ? v : v & low_bytes[size];
 }
 
 static int expedited_byte(unsigned cs, unsigned size, uint8_t *b)
@@ -125,7 +131,7 @@ static int check_frame(const struct qrtcan_frame *f, uint32_t base,
 int qrtcan_sdo_encode_request(unsigned node, const struct qrtcan_sdo *s,
                               struct qrtcan_frame *f)
 {
-    if (s == 0 || f == 0) {
+    if (s == NULL || f == NULL) {
         return QRTCAN_E_ARG;
     }
     if (!qrtcan_node_valid(node)) {
@@ -137,7 +143,7 @@ int qrtcan_sdo_encode_request(unsigned node, const struct qrtcan_sdo *s,
 int qrtcan_sdo_encode_response(unsigned node, const struct qrtcan_sdo *s,
                                struct qrtcan_frame *f)
 {
-    if (s == 0 || f == 0) {
+    if (s == NULL || f == NULL) {
         return QRTCAN_E_ARG;
     }
     if (!qrtcan_node_valid(node)) {
@@ -150,7 +156,7 @@ int qrtcan_sdo_decode_request(const struct qrtcan_frame *f, unsigned *node,
                               struct qrtcan_sdo *s)
 {
     int rc;
-    if (f == 0 || node == 0 || s == 0) {
+    if (f == NULL || node == NULL || s == NULL) {
         return QRTCAN_E_ARG;
     }
     rc = check_frame(f, QRTCAN_FN_RSDO, node);
@@ -184,7 +190,7 @@ int qrtcan_sdo_decode_response(const struct qrtcan_frame *f, unsigned *node,
                                struct qrtcan_sdo *s)
 {
     int rc;
-    if (f == 0 || node == 0 || s == 0) {
+    if (f == NULL || node == NULL || s == NULL) {
         return QRTCAN_E_ARG;
     }
     rc = check_frame(f, QRTCAN_FN_TSDO, node);
@@ -217,15 +223,15 @@ int32_t qrtcan_sdo_signed(const struct qrtcan_sdo *s)
 {
     unsigned size;
     uint32_t v, sign;
-    if (s == 0) {
+    if (s == NULL) {
         return 0;
     }
     size = s->size == 0 ? 4u : s->size;
     v = masked(s->data, size);
     if (size < 4) {
-        sign = 1u << (8 * size - 1);
+        sign = (low_bytes[size] >> 1) + 1u; /* the top bit of the low bytes */
         if (v & sign) {
-            v |= ~((sign << 1) - 1u);
+            v |= ~low_bytes[size];
         }
     }
     /* two's complement bit pattern into int32 without implementation-

@@ -1,5 +1,6 @@
 #include "qrtcan/sync.h"
 
+#include <stddef.h>
 #include <string.h>
 
 /* CiA 301: the synchronous counter overflow value is 2..240. */
@@ -7,7 +8,7 @@
 
 int qrtcan_sync_encode(unsigned counter, struct qrtcan_frame *f)
 {
-    if (f == 0 || counter > SYNC_COUNTER_MAX) {
+    if (f == NULL || counter > SYNC_COUNTER_MAX) {
         return QRTCAN_E_ARG;
     }
     memset(f, 0, sizeof *f);
@@ -19,7 +20,7 @@ int qrtcan_sync_encode(unsigned counter, struct qrtcan_frame *f)
 
 int qrtcan_sync_decode(const struct qrtcan_frame *f, unsigned *counter)
 {
-    if (f == 0 || counter == 0) {
+    if (f == NULL || counter == NULL) {
         return QRTCAN_E_ARG;
     }
     if (f->id != QRTCAN_SYNC_COB_ID) {
