@@ -59,7 +59,7 @@ tsan_logs="$PWD/build-tsan/races"
 rm -rf "$tsan_logs"
 mkdir -p "$tsan_logs"
 TSAN_OPTIONS="halt_on_error=0 log_path=$tsan_logs/race" \
-    ctest_args="-R ^(test_mask_threads|daemon_tests|daemon_can_vm|can_exec_vm|canopen_drive_vm)$" \
+    ctest_args="-R ^(test_mask_threads|daemon_tests|daemon_can_vm|daemon_soak_vm|can_exec_vm|canopen_drive_vm)$" \
     run_suite "ThreadSanitizer build (the tests that run threads)" build-tsan \
     -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQRT_TSAN=ON -DQRT_PYTHON_TESTS=ON
 if ls "$tsan_logs"/race* >/dev/null 2>&1; then
