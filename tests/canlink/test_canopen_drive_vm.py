@@ -28,15 +28,9 @@ sys.path[:0] = [os.path.join(REPO, "tools"), os.path.join(REPO, "tests", "daemon
 if "--lcmtypes" in sys.argv:
     os.environ["QRT_LCMTYPES_PY"] = sys.argv[sys.argv.index("--lcmtypes") + 1]
 import conftest as cf  # noqa: E402
+from vm_checks import DaemonWatch, check, failures  # noqa: E402
 import lcm  # noqa: E402
 
-failures = []
-
-
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what, flush=True)
-    if not cond:
-        failures.append(what)
 
 
 # statusword state bits (CiA 402 table 30)
@@ -181,17 +175,8 @@ def main():
                                "--sdo-timeout", "500"],
                               stdout=log, stderr=subprocess.STDOUT)
     lc = lcm.LCM(url)
-    joints = []
-    lc.subscribe("QRT_JOINT_STATE", lambda c, d: joints.append(
-        cf.joint_state_t.decode(d)))
-
-    def pump(seconds, until):
-        end = time.time() + seconds
-        while time.time() < end:
-            lc.handle_timeout(10)
-            if until():
-                return True
-        return until()
+    watch = DaemonWatch(lc, cf)
+    joints, pump = watch.joints, watch.pump
 
     goal = [60.0, 20.0, -30.0]
     t0 = time.time()

@@ -47,16 +47,10 @@ import conftest as cf  # noqa: E402
 import lcm  # noqa: E402
 import oracle  # noqa: E402
 from candump_capture import drain, dropped, start  # noqa: E402
+from vm_checks import DaemonWatch, check, failures  # noqa: E402
 
-failures = []
 # TPDO1 of nodes 1 and 2 with too few bytes (candump's spelling)
 MALFORMED = ("181#00", "182#0102")
-
-
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what, flush=True)
-    if not cond:
-        failures.append(what)
 
 
 def quick_stops(capture):
@@ -100,21 +94,9 @@ def main():
                                "--heartbeat-timeout", "1500"],
                               stdout=daemon_log, stderr=subprocess.STDOUT)
     lc = lcm.LCM(url)
-    joints, plans = [], []
-    lc.subscribe("QRT_JOINT_STATE", lambda c, d: joints.append(
-        cf.joint_state_t.decode(d)))
-    lc.subscribe("QRT_PLAN", lambda c, d: plans.append(cf.plan_t.decode(d)))
-    statuses = []
-    lc.subscribe("QRT_STATUS", lambda c, d: statuses.append(
-        cf.daemon_status_t.decode(d)))
-
-    def pump(seconds, until=None):
-        end = time.time() + seconds
-        while time.time() < end:
-            lc.handle_timeout(10)
-            if until and until():
-                return True
-        return until() if until else True
+    watch = DaemonWatch(lc, cf)
+    joints, plans, statuses, pump = (watch.joints, watch.plans, watch.statuses,
+                                     watch.pump)
 
     scene, pts = cf.scene_points("table4_one_sphere.json")
     arm = oracle.Arm(scene)

@@ -37,6 +37,7 @@ if "--lcmtypes" in sys.argv:
 import conftest as cf  # noqa: E402
 import lcm  # noqa: E402
 import oracle  # noqa: E402
+from vm_checks import DaemonWatch, check, failures  # noqa: E402
 
 NOISE_M = 0.002
 # a point moved by NOISE_M on each axis moves by up to this much
@@ -44,13 +45,6 @@ NOISE_BOUND_M = NOISE_M * np.sqrt(3.0)
 GOALS = [[100, 0, 0], [-100, 0, 0], [0, 30, -30], [150, -10, 0],
          [-150, 20, -40], [60, 45, -90], [-30, 60, -120], [170, 10, -20],
          [-170, 5, 10]]
-failures = []
-
-
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what, flush=True)
-    if not cond:
-        failures.append(what)
 
 
 def main():
@@ -75,20 +69,9 @@ def main():
                                "--heartbeat-timeout", "1500"],
                               stdout=open(log_path, "w"), stderr=subprocess.STDOUT)
     lc = lcm.LCM(url)
-    joints, plans, statuses = [], [], []
-    lc.subscribe("QRT_JOINT_STATE", lambda c, d: joints.append(
-        cf.joint_state_t.decode(d)))
-    lc.subscribe("QRT_PLAN", lambda c, d: plans.append(cf.plan_t.decode(d)))
-    lc.subscribe("QRT_STATUS", lambda c, d: statuses.append(
-        cf.daemon_status_t.decode(d)))
-
-    def pump(seconds, until=None):
-        end = time.time() + seconds
-        while time.time() < end:
-            lc.handle_timeout(10)
-            if until and until():
-                return True
-        return until() if until else True
+    watch = DaemonWatch(lc, cf)
+    joints, plans, statuses, pump = (watch.joints, watch.plans, watch.statuses,
+                                     watch.pump)
 
     scene, pts = cf.scene_points("table4_one_sphere.json")
     arm = oracle.Arm(scene)

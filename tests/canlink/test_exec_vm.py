@@ -37,15 +37,9 @@ REPO = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, os.path.join(REPO, "tools"))
 import oracle  # noqa: E402
 from candump_capture import drain, dropped, start  # noqa: E402
+from vm_checks import check, failures  # noqa: E402
 
 SERVO_ERROR = 5  # counts = 0.005 deg at 1000 counts/deg
-failures = []
-
-
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what, flush=True)
-    if not cond:
-        failures.append(what)
 
 
 def wrap180(x):
