@@ -47,7 +47,8 @@ import conftest as cf  # noqa: E402
 import lcm  # noqa: E402
 import oracle  # noqa: E402
 from candump_capture import drain, dropped, start  # noqa: E402
-from vm_checks import DaemonWatch, check, failures  # noqa: E402
+from vm_checks import (DaemonWatch, check, failures,  # noqa: E402
+                       stop_daemon_and_drives)
 
 # TPDO1 of nodes 1 and 2 with too few bytes (candump's spelling)
 MALFORMED = ("181#00", "182#0102")
@@ -228,13 +229,7 @@ def main():
                   f"{st.can_bus_errors} (all from the unplugging)"
                   if st else "no status"))
     finally:
-        daemon.terminate()
-        try:
-            daemon.wait(15)
-        except subprocess.TimeoutExpired:
-            daemon.kill()
-        sim.terminate()
-        sim.wait(10)
+        stop_daemon_and_drives(daemon, sim)
         drained = drain(capture)
         dump.terminate()
         dump.wait(10)

@@ -37,7 +37,8 @@ if "--lcmtypes" in sys.argv:
 import conftest as cf  # noqa: E402
 import lcm  # noqa: E402
 import oracle  # noqa: E402
-from vm_checks import DaemonWatch, check, failures  # noqa: E402
+from vm_checks import (DaemonWatch, check, failures,  # noqa: E402
+                       stop_daemon_and_drives)
 
 NOISE_M = 0.002
 # a point moved by NOISE_M on each axis moves by up to this much
@@ -136,13 +137,7 @@ def main():
         seen = len(statuses)
         pump(3, lambda: len(statuses) > seen)
     finally:
-        daemon.terminate()
-        try:
-            daemon.wait(15)
-        except subprocess.TimeoutExpired:
-            daemon.kill()
-        sim.terminate()
-        sim.wait(10)
+        stop_daemon_and_drives(daemon, sim)
     check(daemon.returncode == 0, f"clean shutdown (exit {daemon.returncode})")
     kinds = {}
     for p in plans:

@@ -1,5 +1,6 @@
-"""What the CAN VM tests share: their "ok"/"FAIL" lines, and what qrtpland
-publishes on LCM, collected as it arrives."""
+"""What the CAN VM tests share: their "ok"/"FAIL" lines, what qrtpland
+publishes on LCM, collected as it arrives, and stopping it and the drives."""
+import subprocess
 import time
 
 failures = []
@@ -35,3 +36,15 @@ class DaemonWatch:
             if until and until():
                 return True
         return until() if until else True
+
+
+def stop_daemon_and_drives(daemon, sim):
+    """SIGTERM to qrtpland (it leaves the drives holding), killed if it has
+    not exited in 15 s; then servo_sim."""
+    daemon.terminate()
+    try:
+        daemon.wait(15)
+    except subprocess.TimeoutExpired:
+        daemon.kill()
+    sim.terminate()
+    sim.wait(10)
