@@ -44,11 +44,14 @@ if [ -x build/bin/qrtpland ] && [ -x build/bin/servo_sim ]; then
 fi
 
 # qrtplan against OMPL (issue 6): the same scenes, interleaved, oracle-checked;
-# in turn (each planner after the others), then replanning (each planner
-# after its own plan of the scan before)
+# in turn (each planner after the others), replanning (each planner after its
+# own plan of the scan before), and cold (each planner after the caches are
+# evicted)
 if [ -x build/bin/bench_ompl ]; then
     .venv/bin/python tools/bench_compare.py --repeats "${QRT_BENCH_OMPL_REPEATS:-15}" \
         --out "$out" | tee "$out/ompl_summary.txt"
     .venv/bin/python tools/bench_compare.py --repeats "${QRT_BENCH_OMPL_REPEATS:-15}" \
         --replanning --out "$out" | tee "$out/ompl_summary_replanning.txt"
+    .venv/bin/python tools/bench_compare.py --repeats "${QRT_BENCH_OMPL_REPEATS:-15}" \
+        --cold --out "$out" | tee "$out/ompl_summary_cold.txt"
 fi

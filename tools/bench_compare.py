@@ -14,9 +14,12 @@ beside the 1x and 10x lines).
 With --replanning, each planner first plans the scan before (the same scene,
 every coordinate moved by up to 2 mm) untimed, as in a loop that replans on
 every scan (bench_ompl's header says what the default regime leaves each
-planner with), and the files are named ompl_*_replanning.*.
+planner with), and the files are named ompl_*_replanning.*. With --cold,
+every planner's timed run starts after 256 MiB have been written and read
+back (its code and data evicted, and neither side left the points the other
+read), and the files are named ompl_*_cold.*.
 
-    .venv/bin/python tools/bench_compare.py [--repeats R] [--seeds N] [--replanning]
+    .venv/bin/python tools/bench_compare.py [--repeats R] [--seeds N] [--replanning | --cold]
     .venv/bin/python tools/bench_compare.py --smoke      # a few seconds, for make test
 """
 import argparse
@@ -139,12 +142,22 @@ def main():
     ap.add_argument("--bench-ompl", default=os.path.join(REPO, "build", "bin", "bench_ompl"))
     ap.add_argument("--qrtplan", default=None)
     ap.add_argument("--out", default=os.path.join(REPO, "build", "bench"))
-    ap.add_argument("--replanning", action="store_true",
-                    help="each planner first plans the scan before, untimed")
+    regimes = ap.add_mutually_exclusive_group()
+    regimes.add_argument("--replanning", action="store_true",
+                         help="each planner first plans the scan before, untimed")
+    regimes.add_argument("--cold", action="store_true",
+                         help="each planner's timed run starts with the caches evicted")
     args = ap.parse_args()
-    suffix = "_replanning" if args.replanning else ""
-    regime = ("replanning: each planner right after its own plan of the scan before"
-              if args.replanning else "in turn: each planner right after the others")
+    if args.replanning:
+        suffix, flag = "_replanning", ["--replanning"]
+        regime = "replanning: each planner right after its own plan of the scan before"
+    elif args.cold:
+        suffix, flag = "_cold", ["--cold"]
+        regime = "cold: each planner after 256 MiB written (caches evicted)"
+    else:
+        suffix, flag = "", []
+        regime = "in turn: each planner right after the others"
+
     print(f"regime: {regime}")
     qrtplan = args.qrtplan or os.path.join(os.path.dirname(args.bench_ompl), "qrtplan")
     if args.smoke:
@@ -154,8 +167,7 @@ def main():
     family_of = {p: fam for fam, p in made}
     raw = os.path.join(args.out, f"ompl_compare{suffix}.csv")
     subprocess.run([args.bench_ompl, "--repeats", str(args.repeats), "--time-limit",
-                    str(args.time_limit), "--csv", raw]
-                   + (["--replanning"] if args.replanning else [])
+                    str(args.time_limit), "--csv", raw] + flag
                    + [p for _, p in made], check=True)
     rows = list(csv.DictReader(open(raw)))
     assert rows, "bench_ompl wrote no rows"

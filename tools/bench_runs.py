@@ -4,21 +4,22 @@
 One run of either benchmark moves with the machine's load (Table 5's cells by
 10-30 %, RRTConnect's medians by up to 1.5x), so the README quotes several
 runs, alternated: for each run, build/bin/bench_table5, then
-tools/bench_compare.py in turn, then with --replanning. Then it prints (and
-writes to OUT/summary.md) the two tables as the README gives them:
+tools/bench_compare.py in turn, with --replanning and with --cold. Then it
+prints (and writes to OUT/summary.md) the tables as the README gives them:
 
 * Table 5: each cell's median over the runs of its median time, and the
   speed-up over the paper's seconds;
 * OMPL: for each family and regime, the median over the runs of qrtplan's and
   RRTConnect's family medians, and qrtplan's lead as the lowest to highest
-  run; PRM's range; the median path lengths (in turn); whether every path of
-  every planner passed the oracle; and the scenes where RRTConnect was ahead
+  run (in turn and replanning in one table, cold in a second); PRM's range;
+  the median path lengths (in turn); whether every path of every planner
+  passed the oracle; and the scenes where RRTConnect was ahead
   or level (qrtplan less than 1.2x ahead) in any run.
 
     .venv/bin/python tools/bench_runs.py [--runs 3] [--repeats 15] [--seeds 3]
     .venv/bin/python tools/bench_runs.py --summarise-only   # the runs in OUT
 
-About 3 minutes a run on the project's machines.
+About 4–5 minutes a run on the project's machines.
 """
 import argparse
 import csv
@@ -29,7 +30,8 @@ import subprocess
 import sys
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-REGIMES = [("turn", ""), ("replan", "_replanning")]
+REGIMES = [("turn", ""), ("replan", "_replanning"), ("cold", "_cold")]
+MAIN_TABLE = ("turn", "replan")  # the cold regime has a table of its own
 LARGEST = "**10 × 1,444** (largest cell)"  # the paper's largest cell, in bold
 TABLE5_ROWS = [(1, 16, "1 × 16"), (1, 1444, "1 × 1,444 (Table 4 scene)"),
                (3, 1444, "3 × 1,444"), (10, 100, "10 × 100"),
@@ -63,6 +65,8 @@ def run_all(out, runs, repeats, seeds):
                     "--out", os.path.join(out, f"{regime}_{i}")]
             if regime == "replan":
                 args.append("--replanning")
+            elif regime == "cold":
+                args.append("--cold")
             run_logged("bench_compare.py", args, os.path.join(out, f"{regime}_{i}.log"))
 
 
@@ -173,6 +177,21 @@ def bold(text, on=True):
     return f"**{text}**" if on else text
 
 
+def race_cells(f, regimes):
+    """A family's qrtplan median, RRTConnect median and lead range for each
+    regime, the lead in bold where every run reached the 10x target."""
+    cells = []
+    for regime in regimes:
+        g = f.get(regime)
+        if g is None:
+            cells += ["–", "–", "–"]
+            continue
+        leads = finite(g["lead"])
+        cells += [bold(ms(median(g["q"]))), ms(median(g["c"])),
+                  bold(span(leads, "{:.1f}", "×"), bool(leads) and min(leads) >= 10)]
+    return cells
+
+
 def render(t5, fams, exceptions):
     lines = []
     if t5:
@@ -194,22 +213,19 @@ def render(t5, fams, exceptions):
                   "path: qrtplan / RRTConnect / RRT\\* (1 s) | oracle |",
                   "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- | --- |"]
         for fam, f in fams.items():
-            cells = [fam]
-            for regime, _ in REGIMES:
-                g = f.get(regime)
-                if g is None:
-                    cells += ["–", "–", "–"]
-                    continue
-                leads = finite(g["lead"])
-                cells += [bold(ms(median(g["q"]))), ms(median(g["c"])),
-                          bold(span(leads, "{:.1f}", "×"), bool(leads) and min(leads) >= 10)]
-            turn = f.get("turn") or f.get("replan")
+            cells = [fam] + race_cells(f, MAIN_TABLE)
+            turn = f.get("turn") or f.get("replan") or f.get("cold")
             cells.append(span(turn["prm"], "{:.3g}", " ms"))
             cells.append(" / ".join(
                 f"{median(turn['len'][n]):.0f}°" if finite(turn["len"].get(n, [])) else "–"
                 for n in ("qrtplan", "RRTConnect", "RRTstar")))
             cells.append("all pass" if f["all_pass"] else "**not all pass**")
             lines.append("| " + " | ".join(cells) + " |")
+        if any("cold" in f for f in fams.values()):
+            lines += ["", "| family | qrtplan, cold | RRTConnect, cold | lead |",
+                      "| --- | ---: | ---: | ---: |"]
+            for fam, f in fams.items():
+                lines.append("| " + " | ".join([fam] + race_cells(f, ("cold",))) + " |")
         lost = [f"{fam}: {name} {rate:.0%} in {regime} run {i}"
                 for fam, f in fams.items() for regime, i, name, rate in f["lost"]]
         lines += ["", "Runs where a planner did not always find a path: " +

@@ -29,10 +29,14 @@ def write(path, header, rows):
 
 def make_runs(tmp_path, oracle_fail_in=None, qrtplan_lost_in=None):
     """Three runs a regime. qrtplan's box median is 2, 3 and 5 ms in turn
-    against RRTConnect's 8, 9 and 16 (a mean would not be the median);
-    box_1 is level in run 2 only."""
-    for regime, suffix, scale in (("turn", "", 1.0), ("replan", "_replanning", 0.5)):
+    against RRTConnect's 8, 9 and 16 (a mean would not be the median), half
+    that replanning; cold, qrtplan's is twice and RRTConnect's four times
+    the figure in turn. box_1 is level in run 2 only."""
+    for regime, suffix, scale, rrt_scale in (("turn", "", 1.0, 1.0),
+                                             ("replan", "_replanning", 0.5, 0.5),
+                                             ("cold", "_cold", 2.0, 4.0)):
         for i, (q, c) in enumerate(((2.0, 8.0), (3.0, 9.0), (5.0, 16.0)), start=1):
+            c *= rrt_scale / scale
             d = tmp_path / f"{regime}_{i}"
             oracle = 0.9 if (regime, i) == oracle_fail_in else 1.0
             if (regime, i) == qrtplan_lost_in:  # what bench_compare writes then
@@ -65,7 +69,7 @@ def ids(tmp_path):
 
 def test_runs_are_found_by_number_only(tmp_path):
     make_runs(tmp_path)
-    assert ids(tmp_path) == {"turn": [1, 2, 3], "replan": [1, 2, 3]}
+    assert ids(tmp_path) == {"turn": [1, 2, 3], "replan": [1, 2, 3], "cold": [1, 2, 3]}
     assert bench_runs.run_numbers(tmp_path, "table5", ".csv") == [1, 2, 3]
 
 
@@ -76,7 +80,10 @@ def test_family_medians_and_lead_ranges(tmp_path):
     assert box["turn"]["lead"] == [4.0, 3.0, 3.2]
     assert box["replan"]["c"] == [4.0, 4.5, 8.0]
     assert box["all_pass"]
-    assert box["lost"] == [("turn", 3, "RRTstar", 2 / 3), ("replan", 3, "RRTstar", 2 / 3)]
+    assert box["cold"]["q"] == [4.0, 6.0, 10.0]
+    assert box["cold"]["lead"] == [8.0, 6.0, 6.4]
+    assert box["lost"] == [("turn", 3, "RRTstar", 2 / 3), ("replan", 3, "RRTstar", 2 / 3),
+                           ("cold", 3, "RRTstar", 2 / 3)]
     table = bench_runs.render([], {"confined box": box}, {})
     row = next(line for line in table.splitlines() if line.startswith("| confined box"))
     cells = [c.strip() for c in row.strip("|").split("|")]
@@ -85,6 +92,12 @@ def test_family_medians_and_lead_ranges(tmp_path):
     assert cells[8] == "333° / 502° / 340°"
     assert cells[9] == "all pass"
     assert "RRTstar 67% in turn run 3" in table
+    # the cold regime in a table of its own, under the first
+    cold = next(line for line in table.splitlines()
+                if line.startswith("| confined box") and line != row)
+    assert table.index("| family | qrtplan, cold |") < table.index(cold)
+    assert [c.strip() for c in cold.strip("|").split("|")] == [
+        "confined box", "**6 ms**", "36 ms", "6.0–8.0×"]
 
 
 def test_an_oracle_failure_in_any_run_shows(tmp_path):
@@ -99,7 +112,7 @@ def test_level_scenes_are_listed_and_clear_ones_are_not(tmp_path):
     level = bench_runs.scene_exceptions(tmp_path, ids(tmp_path))
     assert list(level) == ["box_1"]
     text = bench_runs.render([], {}, level)
-    assert "`box_1`: turn 1.05–3.00×, replan 1.05–3.00×" in text
+    assert "`box_1`: turn 1.05–3.00×, replan 1.05–3.00×, cold 1.05–3.00×" in text
 
 
 def test_table5_medians_and_speed_up(tmp_path):

@@ -3,13 +3,17 @@
 // collides), interleaved repetition by repetition so that machine noise hits
 // both alike.
 //
-//   bench_ompl [--repeats R] [--time-limit S] [--csv OUT] [--replanning]
-//              SCENE.json...
+//   bench_ompl [--repeats R] [--time-limit S] [--csv OUT]
+//              [--replanning | --cold [--evict-mib M]] SCENE.json...
 //
-// Two regimes. In turn (the default): each planner's timed run follows the
+// Three regimes. In turn (the default): each planner's timed run follows the
 // other planners' runs, so qrtplan always starts after PRM, which evicts its
 // data and code, while RRTConnect starts after qrtplan's short run, with
 // OMPL's code warm from PRM and the points just read by qrtplan. With
+// --cold, every timed run (each planner's) starts after evict_bytes (256 MiB)
+// have been written and read back, which evicts the caches' data and code
+// alike: each planner then starts as a plan that runs once after other work
+// does, and neither inherits the other's warm points. With
 // --replanning, each planner (but RRT*) first plans, untimed, the scan
 // before: the same scene with every coordinate moved by up to kJitterM, as
 // a range sensor's noise moves it between scans; then the scene's points are
@@ -32,6 +36,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <string>
@@ -62,6 +67,10 @@ constexpr double kDeg = M_PI / 180.0;
 constexpr double kCell = 0.05;
 constexpr double kStepDeg = 0.25;
 constexpr double kJitterM = 0.002;
+// What --cold writes before each timed run. The VM here reports a 480 MiB
+// L3, but the planners' times stop rising between 64 and 256 MiB (a sweep
+// of 4 MiB to 1 GiB, docs/performance.md "A race from cold caches").
+size_t evict_bytes = size_t(256) << 20;
 
 double now_ms()
 {
@@ -240,6 +249,22 @@ Checker checker_for(const scene &sc, const double *xyz, long n)
     return chk;
 }
 
+// Writes and reads back a buffer larger than the caches, so that the next
+// timed run finds none of its code or data there. The sum goes to a
+// volatile, so the reads are not optimised away.
+volatile unsigned long evict_sink;
+void evict_caches(std::vector<unsigned char> &buf)
+{
+    if (buf.size() != evict_bytes)
+        buf.assign(evict_bytes, 0);
+    unsigned long sum = 0;
+    for (size_t i = 0; i < buf.size(); i += 64)
+        buf[i] = (unsigned char)(buf[i] + 1);
+    for (size_t i = 0; i < buf.size(); i += 64)
+        sum += buf[i];
+    evict_sink = sum;
+}
+
 // The points a timed run reads: the scene's own, or (replanning) a copy
 // just made in scan, as a scan arrives.
 const double *arrived(const scene &sc, bool replanning,
@@ -335,8 +360,9 @@ int main(int argc, char **argv)
     int repeats = 5;
     double limit_s = 5.0;
     const char *csv_path = nullptr;
-    bool replanning = false;
+    bool replanning = false, cold = false;
     std::vector<const char *> scenes;
+    std::vector<unsigned char> evict_buf;
     for (int i = 1; i < argc; i++) {
         if (!std::strcmp(argv[i], "--repeats") && i + 1 < argc)
             repeats = std::max(1, std::atoi(argv[++i]));
@@ -346,13 +372,33 @@ int main(int argc, char **argv)
             csv_path = argv[++i];
         else if (!std::strcmp(argv[i], "--replanning"))
             replanning = true;
-        else if (argv[i][0] == '-') {
+        else if (!std::strcmp(argv[i], "--cold"))
+            cold = true;
+        else if (!std::strcmp(argv[i], "--evict-mib") && i + 1 < argc) {
+            char *end = nullptr;
+            long mib = std::strtol(argv[++i], &end, 10);
+            if (*end || mib < 1 || mib > 65536) {
+                std::fprintf(stderr,
+                             "bench_ompl: --evict-mib wants 1..65536, "
+                             "not '%s'\n",
+                             argv[i]);
+                return 2;
+            }
+            evict_bytes = size_t(mib) << 20;
+        } else if (argv[i][0] == '-') {
             std::fprintf(stderr,
                          "usage: bench_ompl [--repeats R] [--time-limit S] "
-                         "[--csv OUT] [--replanning] SCENE.json...\n");
+                         "[--csv OUT] [--replanning | --cold [--evict-mib M]] "
+                         "SCENE.json...\n");
             return 2;
         } else
             scenes.push_back(argv[i]);
+    }
+    if (replanning && cold) {
+        std::fprintf(stderr,
+                     "bench_ompl: --replanning and --cold are two regimes; "
+                     "give one\n");
+        return 2;
     }
     ompl::msg::setLogLevel(ompl::msg::LOG_NONE);
     FILE *csv = csv_path ? std::fopen(csv_path, "w") : stdout;
@@ -388,6 +434,8 @@ int main(int argc, char **argv)
             }
             std::vector<double> scan;
             const double *points = arrived(sc, replanning, scan);
+            if (cold)
+                evict_caches(evict_buf);
             double t0 = now_ms();
             qrt_planner_init(&pl, &sc.params);
             qrt_planner_add_points(&pl, points, sc.n_points);
@@ -430,6 +478,8 @@ int main(int argc, char **argv)
                              checker_for(sc, before.data(), sc.n_points), name,
                              limit);
                 const double *points = arrived(sc, replanning, scan);
+                if (cold)
+                    evict_caches(evict_buf);
                 double t1 = now_ms();
                 Checker chk = checker_for(sc, points, sc.n_points);
                 double build = now_ms() - t1;
