@@ -157,7 +157,6 @@ def main():
     else:
         suffix, flag = "", []
         regime = "in turn: each planner right after the others"
-
     print(f"regime: {regime}")
     qrtplan = args.qrtplan or os.path.join(os.path.dirname(args.bench_ompl), "qrtplan")
     if args.smoke:

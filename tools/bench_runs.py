@@ -32,6 +32,7 @@ import sys
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 REGIMES = [("turn", ""), ("replan", "_replanning"), ("cold", "_cold")]
 MAIN_TABLE = ("turn", "replan")  # the cold regime has a table of its own
+REGIME_FLAGS = {"turn": [], "replan": ["--replanning"], "cold": ["--cold"]}
 LARGEST = "**10 × 1,444** (largest cell)"  # the paper's largest cell, in bold
 TABLE5_ROWS = [(1, 16, "1 × 16"), (1, 1444, "1 × 1,444 (Table 4 scene)"),
                (3, 1444, "3 × 1,444"), (10, 100, "10 × 100"),
@@ -63,10 +64,7 @@ def run_all(out, runs, repeats, seeds):
             args = [sys.executable, os.path.join(REPO, "tools", "bench_compare.py"),
                     "--repeats", str(repeats), "--seeds", str(seeds),
                     "--out", os.path.join(out, f"{regime}_{i}")]
-            if regime == "replan":
-                args.append("--replanning")
-            elif regime == "cold":
-                args.append("--cold")
+            args += REGIME_FLAGS[regime]
             run_logged("bench_compare.py", args, os.path.join(out, f"{regime}_{i}.log"))
 
 

@@ -158,3 +158,14 @@ def test_a_failing_benchmark_stops_the_runs_and_names_its_log(tmp_path):
     with pytest.raises(SystemExit) as e:
         bench_runs.run_logged("y", [str(tmp_path / "no-such-binary")], log)
     assert "cannot run y" in str(e.value) and "run `make` first" in str(e.value)
+
+
+def test_each_regime_runs_with_its_own_flag(tmp_path, monkeypatch):
+    calls = []
+    monkeypatch.setattr(bench_runs, "run_logged", lambda name, args, log: calls.append(args))
+    bench_runs.run_all(str(tmp_path), 1, 2, 1)
+    compare = [a for a in calls if a[1].endswith("bench_compare.py")]
+    flags = {a[a.index("--out") + 1].rsplit("/", 1)[1]:
+             [x for x in a if x in ("--replanning", "--cold")] for a in compare}
+    assert flags == {"turn_1": [], "replan_1": ["--replanning"], "cold_1": ["--cold"]}
+    assert calls[0][0].endswith("bench_table5") and len(calls) == 4
