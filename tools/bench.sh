@@ -48,10 +48,9 @@ fi
 # own plan of the scan before), and cold (each planner after the caches are
 # evicted)
 if [ -x build/bin/bench_ompl ]; then
-    .venv/bin/python tools/bench_compare.py --repeats "${QRT_BENCH_OMPL_REPEATS:-15}" \
-        --out "$out" | tee "$out/ompl_summary.txt"
-    .venv/bin/python tools/bench_compare.py --repeats "${QRT_BENCH_OMPL_REPEATS:-15}" \
-        --replanning --out "$out" | tee "$out/ompl_summary_replanning.txt"
-    .venv/bin/python tools/bench_compare.py --repeats "${QRT_BENCH_OMPL_REPEATS:-15}" \
-        --cold --out "$out" | tee "$out/ompl_summary_cold.txt"
+    for regime in "" replanning cold; do
+        .venv/bin/python tools/bench_compare.py --repeats "${QRT_BENCH_OMPL_REPEATS:-15}" \
+            ${regime:+--$regime} --out "$out" |
+            tee "$out/ompl_summary${regime:+_$regime}.txt"
+    done
 fi
