@@ -47,6 +47,7 @@ NOISE_BOUND_M = NOISE_M * np.sqrt(3.0)
 GOALS = [[100, 0, 0], [-100, 0, 0], [0, 30, -30], [150, -10, 0],
          [-150, 20, -40], [60, 45, -90], [-30, 60, -120], [170, 10, -20],
          [-170, 5, 10]]
+START = [-100, 0, 0]  # where servo_sim powers up: the paper's Table 4 start
 
 
 def joint_gap(a, b):
@@ -82,8 +83,8 @@ def main():
     os.makedirs(args.out, exist_ok=True)
     url = "udpm://239.255.76.67:7779?ttl=0&recv_buf_size=4194304"
     sim = subprocess.Popen([args.servo_sim, "--iface", "vcan0", "--start-deg",
-                            "-100,0,0", "--servo-error", "5", "--watchdog-ms",
-                            "500"],
+                            ",".join(map(str, START)), "--servo-error", "5",
+                            "--watchdog-ms", "500"],
                            stderr=open(os.path.join(args.out, "sim.log"), "w"))
     log_path = os.path.join(args.out, "qrtpland.log")
     daemon = subprocess.Popen([args.daemon, "--lcm-url", url, "--can", "vcan0",
@@ -104,6 +105,7 @@ def main():
     check(len(free) >= 5, f"{len(free)} of the {len(GOALS)} goals are clear "
           "of the sphere by 3 cm")
     requests = moving_requests = 0
+    goal = START  # the arm's goal until the soak gives one
     t0 = time.time()
     try:
         ready = pump(15, lambda: joints and joints[-1].drive_state == "ready")
