@@ -190,15 +190,11 @@ def main():
         bus_errors = statuses[-1].can_bus_errors if statuses else -1
         # finally to the goal
         lc.publish("QRT_SCAN", cf.scan_from_points(pts).encode())
-        reached = pump(60, lambda: joints and not joints[-1].moving and
-                       max(abs(oracle.wrap180(joints[-1].joints_deg[0] - goal[0])),
-                           abs(joints[-1].joints_deg[1] - goal[1]),
-                           abs(joints[-1].joints_deg[2] - goal[2])) < 0.05)
+        reached = pump(60, lambda: watch.at_rest_at(goal))
         if not reached:
             for _ in range(20):  # keep scanning: every scan replans from here
                 lc.publish("QRT_SCAN", cf.scan_from_points(pts).encode())
-                if pump(3, lambda: joints and not joints[-1].moving and
-                        abs(oracle.wrap180(joints[-1].joints_deg[0] - goal[0])) < 0.05):
+                if pump(3, lambda: watch.at_rest_at(goal)):
                     reached = True
                     break
         check(reached, f"the arm reached the goal: {list(joints[-1].joints_deg) if joints else None}")
@@ -214,8 +210,7 @@ def main():
         pump(5, lambda: len(statuses) > seen and
              statuses[-1].can_frames_malformed >= len(MALFORMED))
         st = statuses[-1] if len(statuses) > seen else None
-        check(joints and not joints[-1].moving and
-              abs(oracle.wrap180(joints[-1].joints_deg[0] - goal[0])) < 0.05,
+        check(watch.at_rest_at(goal),
               "the arm holds at the goal after the malformed frames")
         check(st is not None and st.can_frames_sent > 0 and
               st.can_frames_received > 0 and

@@ -39,7 +39,7 @@ import conftest as cf  # noqa: E402
 import lcm  # noqa: E402
 import oracle  # noqa: E402
 from vm_checks import (DaemonWatch, check, failures,  # noqa: E402
-                       stop_daemon_and_drives)
+                       joint_gap, stop_daemon_and_drives)
 
 NOISE_M = 0.002
 # a point moved by NOISE_M on each axis moves by up to this much
@@ -50,23 +50,13 @@ GOALS = [[100, 0, 0], [-100, 0, 0], [0, 30, -30], [150, -10, 0],
 START = [-100, 0, 0]  # where servo_sim powers up: the paper's Table 4 start
 
 
-def joint_gap(a, b):
-    """The largest joint difference between two poses, in degrees (alpha
-    wraps)."""
-    return max(abs(oracle.wrap180(a[0] - b[0])), abs(a[1] - b[1]),
-               abs(a[2] - b[2]))
-
-
-def wait_at(pump, lc, pts, joints, goal, seconds):
+def wait_at(watch, pts, goal, seconds):
     """Whether the arm comes to rest at goal within about `seconds`, with the
     scan sent again every second (every scan replans from where the arm
     is)."""
-    def at_goal():
-        return (bool(joints) and not joints[-1].moving and
-                joint_gap(joints[-1].joints_deg, goal) < 0.05)
     for _ in range(int(seconds)):
-        lc.publish("QRT_SCAN", cf.scan_from_points(pts).encode())
-        if pump(1.0, at_goal):
+        watch.lc.publish("QRT_SCAN", cf.scan_from_points(pts).encode())
+        if watch.pump(1.0, lambda: watch.at_rest_at(goal)):
             return True
     return False
 
@@ -131,7 +121,7 @@ def main():
         # already resting there would never start it moving (the soak's
         # timing, hence where it ends, depends on the machine)
         soak_goal = goal
-        check(wait_at(pump, lc, pts, joints, soak_goal, 60),
+        check(wait_at(watch, pts, soak_goal, 60),
               f"the arm came to rest at the soak's last goal {soak_goal}")
         # the last goal is given while the arm moves towards another, far
         # from where it rests: the daemon must finish that path and then go
@@ -153,7 +143,7 @@ def main():
         check(moving and joints[-1].moving,
               f"the last goal {goal} is given while the arm moves from "
               f"{soak_goal} towards {towards}")
-        reached = wait_at(pump, lc, pts, joints, goal, 90)
+        reached = wait_at(watch, pts, goal, 90)
         check(reached, f"the arm reached the last goal {goal}: "
               f"{list(joints[-1].joints_deg) if joints else None}")
         seen = len(statuses)

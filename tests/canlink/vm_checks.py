@@ -1,7 +1,10 @@
 """What the CAN VM tests share: their "ok"/"FAIL" lines, what qrtpland
-publishes on LCM, collected as it arrives, and stopping it and the drives."""
+publishes on LCM, collected as it arrives, how far a pose is from a goal,
+and stopping it and the drives. (The importer puts tools/ on sys.path.)"""
 import subprocess
 import time
+
+import oracle
 
 failures = []
 
@@ -27,6 +30,11 @@ class DaemonWatch:
         lc.subscribe("QRT_STATUS", lambda c, d: self.statuses.append(
             types.daemon_status_t.decode(d)))
 
+    def at_rest_at(self, goal):
+        """Whether the last joint state is at rest within 0.05 deg of goal."""
+        return (bool(self.joints) and not self.joints[-1].moving and
+                joint_gap(self.joints[-1].joints_deg, goal) < 0.05)
+
     def pump(self, seconds, until=None):
         """Handle messages for up to `seconds`, or until until() is true;
         returns until()'s last answer (True without one)."""
@@ -36,6 +44,13 @@ class DaemonWatch:
             if until and until():
                 return True
         return until() if until else True
+
+
+def joint_gap(a, b):
+    """The largest joint difference between two poses, in degrees (alpha
+    wraps)."""
+    return max(abs(oracle.wrap180(a[0] - b[0])), abs(a[1] - b[1]),
+               abs(a[2] - b[2]))
 
 
 def stop_daemon_and_drives(daemon, sim):
