@@ -191,12 +191,10 @@ def main():
         # finally to the goal
         lc.publish("QRT_SCAN", cf.scan_from_points(pts).encode())
         reached = pump(60, lambda: watch.at_rest_at(goal))
-        if not reached:
-            for _ in range(20):  # keep scanning: every scan replans from here
-                lc.publish("QRT_SCAN", cf.scan_from_points(pts).encode())
-                if pump(3, lambda: watch.at_rest_at(goal)):
-                    reached = True
-                    break
+        if not reached:  # keep scanning: every scan replans from here
+            reached = watch.rescan_until(
+                lambda: cf.scan_from_points(pts).encode(),
+                lambda: watch.at_rest_at(goal), 20, 3)
         check(reached, f"the arm reached the goal: {list(joints[-1].joints_deg) if joints else None}")
         # the frame counters in the daemon's status (1 Hz): a healthy run
         # loses nothing and reads nothing malformed from servo_sim, but the

@@ -50,17 +50,6 @@ GOALS = [[100, 0, 0], [-100, 0, 0], [0, 30, -30], [150, -10, 0],
 START = [-100, 0, 0]  # where servo_sim powers up: the paper's Table 4 start
 
 
-def wait_at(watch, pts, goal, seconds):
-    """Whether the arm comes to rest at goal within about `seconds`, with the
-    scan sent again every second (every scan replans from where the arm
-    is)."""
-    for _ in range(int(seconds)):
-        watch.lc.publish("QRT_SCAN", cf.scan_from_points(pts).encode())
-        if watch.pump(1.0, lambda: watch.at_rest_at(goal)):
-            return True
-    return False
-
-
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--daemon", required=True)
@@ -121,7 +110,10 @@ def main():
         # already resting there would never start it moving (the soak's
         # timing, hence where it ends, depends on the machine)
         soak_goal = goal
-        check(wait_at(watch, pts, soak_goal, 60),
+        def scan():
+            return cf.scan_from_points(pts).encode()
+        check(watch.rescan_until(scan, lambda: watch.at_rest_at(soak_goal),
+                                 60, 1.0),
               f"the arm came to rest at the soak's last goal {soak_goal}")
         # the last goal is given while the arm moves towards another, far
         # from where it rests: the daemon must finish that path and then go
@@ -132,18 +124,15 @@ def main():
         requests += 1
         lc.publish("QRT_PLAN_REQUEST",
                    cf.request(towards, request_id=requests).encode())
-        moving = False
-        for _ in range(30):
-            lc.publish("QRT_SCAN", cf.scan_from_points(pts).encode())
-            if pump(0.5, lambda: joints and joints[-1].moving):
-                moving = True
-                break
+        moving = watch.rescan_until(
+            scan, lambda: joints and joints[-1].moving, 30, 0.5)
         requests += 1
         lc.publish("QRT_PLAN_REQUEST", cf.request(goal, request_id=requests).encode())
         check(moving and joints[-1].moving,
               f"the last goal {goal} is given while the arm moves from "
               f"{soak_goal} towards {towards}")
-        reached = wait_at(watch, pts, goal, 90)
+        reached = watch.rescan_until(scan, lambda: watch.at_rest_at(goal),
+                                     90, 1.0)
         check(reached, f"the arm reached the last goal {goal}: "
               f"{list(joints[-1].joints_deg) if joints else None}")
         seen = len(statuses)

@@ -45,6 +45,16 @@ class DaemonWatch:
                 return True
         return until() if until else True
 
+    def rescan_until(self, scan, until, tries, seconds):
+        """Publish a fresh scan, scan() encoded (every scan replans from
+        where the arm is), and pump for `seconds`, up to `tries` times,
+        until until() is true; returns whether it became true."""
+        for _ in range(tries):
+            self.lc.publish("QRT_SCAN", scan())
+            if self.pump(seconds, until):
+                return True
+        return False
+
 
 def joint_gap(a, b):
     """The largest joint difference between two poses, in degrees (alpha
