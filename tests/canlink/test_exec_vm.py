@@ -42,10 +42,6 @@ from vm_checks import check, failures  # noqa: E402
 SERVO_ERROR = 5  # counts = 0.005 deg at 1000 counts/deg
 
 
-def wrap180(x):
-    return (x + 180.0) % 360.0 - 180.0
-
-
 class Bus:
     """servo_sim and a candump capture on vcan0 for one scenario."""
 
@@ -123,7 +119,7 @@ def off_path(q, waypoints):
     for a, b in zip(waypoints[:-1], waypoints[1:]):
         a = np.asarray(a, float)
         d = np.asarray(b, float) - a
-        d[0] = wrap180(d[0])
+        d[0] = oracle.wrap180(d[0])
         p = q - a
         p[:, 0] = (p[:, 0] + 180.0) % 360.0 - 180.0
         t = np.clip(p @ d / max(d @ d, 1e-12), 0.0, 1.0)
@@ -196,7 +192,7 @@ def scenario_table4(args):
           f"every traced pose is collision-free (oracle): min clearance "
           f"{c.min():.4f} m over {len(q)} poses")
     end = q[-1] - np.asarray(wps[-1], float)
-    end[0] = wrap180(end[0])
+    end[0] = oracle.wrap180(end[0])
     check(float(np.abs(end).max()) < 0.02, f"ends at the goal: {q[-1].tolist()}")
     # the short way across +-180: alpha never passes through 0
     check(bool(np.all(np.abs(q[:, 0]) > 90.0)),
