@@ -101,6 +101,11 @@ def wrap180(x):
     return r
 
 
+def wrap180_array(a):
+    """wrap180 elementwise, into [-180, 180) (only -180 differs from it)."""
+    return (np.asarray(a, float) + 180.0) % 360.0 - 180.0
+
+
 def sample_path(arm, waypoints, step=STEP_DEG):
     """Configurations every <= step degrees per joint along the path."""
     samples = [np.asarray(waypoints[0], float)]
@@ -113,7 +118,7 @@ def sample_path(arm, waypoints, step=STEP_DEG):
         samples.append(np.asarray(a, float)[None, :] + t * d[None, :])
     q = np.vstack(samples)
     if arm.alpha_wraps:
-        q[:, 0] = (q[:, 0] + 180.0) % 360.0 - 180.0
+        q[:, 0] = wrap180_array(q[:, 0])
     return q
 
 

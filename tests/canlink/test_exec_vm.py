@@ -121,7 +121,7 @@ def off_path(q, waypoints):
         d = np.asarray(b, float) - a
         d[0] = oracle.wrap180(d[0])
         p = q - a
-        p[:, 0] = (p[:, 0] + 180.0) % 360.0 - 180.0
+        p[:, 0] = oracle.wrap180_array(p[:, 0])
         t = np.clip(p @ d / max(d @ d, 1e-12), 0.0, 1.0)
         best = np.minimum(best, np.linalg.norm(p - t[:, None] * d, axis=1))
     return best
