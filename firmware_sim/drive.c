@@ -41,6 +41,11 @@ struct od_entry {
 static const struct od_entry od[] = {
     E(0x1000, 0, device_type, RO),
     E(0x1001, 0, error_register, RO),
+    E(0x1016, 0, hb_consumer_count, RO),
+    E(0x1016, 1, hb_consumer[0], RW),
+    E(0x1016, 2, hb_consumer[1], RW),
+    E(0x1016, 3, hb_consumer[2], RW),
+    E(0x1016, 4, hb_consumer[3], RW),
     E(0x1017, 0, heartbeat_ms, RW),
     E(0x1018, 0, identity_count, RO),
     E(0x1018, 1, identity[0], RO),
@@ -159,6 +164,10 @@ static void reset_application(struct drive *d)
     d->error_code = 0;
     d->error_register = 0;
     d->controlword = 0;
+    /* quick stop: a drive that lost its master keeps the arm (which has no
+     * brakes) under torque at rest, where 1 (fault) or 2 (disable voltage)
+     * would drop it; the master writes 0x6007 at bring-up anyway and reads
+     * it back, so it relies on no default */
     d->abort_option = 3;
     d->mode = QRTCAN_MODE_PROFILE_POSITION;
     d->position_window = DEFAULT_WINDOW;
@@ -177,7 +186,7 @@ static void reset_application(struct drive *d)
 static void reset_communication(struct drive *d, const struct can_driver *can)
 {
     struct qrtcan_frame f;
-    unsigned n = d->cfg.node;
+    unsigned n = d->cfg.node, i;
     d->heartbeat_ms = d->cfg.heartbeat_ms;
     d->pdo_comm_count = 2;
     d->pdo_map_count = 2;
@@ -189,8 +198,16 @@ static void reset_communication(struct drive *d, const struct can_driver *can)
     d->rpdo_map[1] = 0x607A0020u;
     d->tpdo_map[0] = 0x60410010u;
     d->tpdo_map[1] = 0x60640020u;
-    d->last_alive_us = 0;
+    d->last_sync_us = 0;
     d->watchdog_tripped = 0;
+    /* no heartbeat consumer at power-up, as on real drives: 0x1016 is a
+     * communication object, so reset communication clears it too */
+    d->hb_consumer_count = (uint8_t)DRIVE_HB_CONSUMERS;
+    for (i = 0; i < DRIVE_HB_CONSUMERS; i++) {
+        d->hb_consumer[i] = 0;
+        d->hb_watch[i] = (uint8_t)DRIVE_HB_IDLE;
+        d->hb_seen_us[i] = 0;
+    }
     if (qrtcan_heartbeat_encode(n, QRTCAN_NMT_BOOTUP, &f) == QRTCAN_OK) {
         send(d, can, &f);
     }
@@ -336,15 +353,53 @@ static void od_set(struct drive *d, const struct od_entry *e, uint32_t v)
     }
 }
 
+/* A heartbeat consumer entry (0x1016:n) is used iff it names a node
+ * (1..127) and a time (not 0); CiA 301. */
+static unsigned hb_entry_node(uint32_t entry)
+{
+    return (unsigned)((entry >> 16) & 0xFFu);
+}
+
+static int hb_entry_used(uint32_t entry)
+{
+    unsigned node = hb_entry_node(entry);
+    return node >= 1u && node <= 127u && (entry & 0xFFFFu) != 0u;
+}
+
+/* Entry sub of 0x1016 may take v: bits 31..24 are reserved (0), and two
+ * used entries never watch the same node (CiA 301 refuses that with
+ * "general parameter incompatibility"). Rewriting an entry's own node is
+ * fine. */
+static uint32_t hb_entry_check(const struct drive *d, uint8_t sub, uint32_t v)
+{
+    unsigned i;
+    if ((v & 0xFF000000u) != 0u) {
+        return QRTCAN_SDO_ABORT_VALUE;
+    }
+    if (!hb_entry_used(v)) {
+        return 0;
+    }
+    for (i = 0; i < DRIVE_HB_CONSUMERS; i++) {
+        if (i + 1u != (unsigned)sub && hb_entry_used(d->hb_consumer[i]) &&
+            hb_entry_node(d->hb_consumer[i]) == hb_entry_node(v)) {
+            return QRTCAN_SDO_ABORT_INCOMPATIBLE;
+        }
+    }
+    return 0;
+}
+
 /* Values the drive refuses (0 = accepted). */
 static uint32_t od_check(const struct drive *d, const struct od_entry *e,
                          int32_t sv, uint32_t v)
 {
     switch (e->index) {
+    case 0x1016:
+        return hb_entry_check(d, e->subindex, v);
     case 0x6060:
         return sv == QRTCAN_MODE_PROFILE_POSITION ? 0 : QRTCAN_SDO_ABORT_VALUE;
     case 0x6007:
-        return sv >= 1 && sv <= 3 ? 0 : QRTCAN_SDO_ABORT_VALUE;
+        /* 0 no action, 1 fault, 2 disable voltage, 3 quick stop */
+        return sv >= 0 && sv <= 3 ? 0 : QRTCAN_SDO_ABORT_VALUE;
     case 0x6081:
     case 0x6083:
     case 0x6084:
@@ -401,6 +456,11 @@ static void sdo_server(struct drive *d, const struct qrtcan_frame *f,
                 } else {
                     od_set(d, e, req.data);
                 }
+                if (e->index == 0x1016) {
+                    /* a written entry watches from its node's next
+                     * heartbeat on, not from an older one */
+                    d->hb_watch[e->subindex - 1u] = (uint8_t)DRIVE_HB_IDLE;
+                }
             }
         }
     }
@@ -425,7 +485,7 @@ static void nmt_command(struct drive *d, const struct qrtcan_frame *f,
     switch (cmd) {
     case QRTCAN_NMT_START:
         if (d->nmt != QRTCAN_NMT_OPERATIONAL) {
-            d->last_alive_us = 0; /* the watchdog arms on the next SYNC */
+            d->last_sync_us = 0; /* the watchdog arms on the next SYNC */
             d->watchdog_tripped = 0;
         }
         d->nmt = QRTCAN_NMT_OPERATIONAL;
@@ -446,10 +506,25 @@ static void nmt_command(struct drive *d, const struct qrtcan_frame *f,
     }
 }
 
-static void alive(struct drive *d, const struct can_driver *can)
+static void sync_seen(struct drive *d, const struct can_driver *can)
 {
-    d->last_alive_us = now(can);
+    d->last_sync_us = now(can);
     d->watchdog_tripped = 0;
+}
+
+/* A heartbeat of node (not this drive): it feeds the consumer entries that
+ * watch that node and only those; it arms an entry that was written since
+ * the last one, and re-arms one whose event fired. */
+static void heartbeat_seen(struct drive *d, unsigned node, uint64_t t)
+{
+    unsigned i;
+    for (i = 0; i < DRIVE_HB_CONSUMERS; i++) {
+        if (hb_entry_used(d->hb_consumer[i]) &&
+            hb_entry_node(d->hb_consumer[i]) == node) {
+            d->hb_watch[i] = (uint8_t)DRIVE_HB_ARMED;
+            d->hb_seen_us[i] = t;
+        }
+    }
 }
 
 void drive_on_frame(struct drive *d, const struct qrtcan_frame *f,
@@ -470,7 +545,7 @@ void drive_on_frame(struct drive *d, const struct qrtcan_frame *f,
             d->nmt != QRTCAN_NMT_OPERATIONAL) {
             break;
         }
-        alive(d, can);
+        sync_seen(d, can);
         {
             struct qrtcan_402_tpdo t;
             update_statusword(d);
@@ -484,10 +559,8 @@ void drive_on_frame(struct drive *d, const struct qrtcan_frame *f,
     case QRTCAN_KIND_HEARTBEAT: {
         enum qrtcan_nmt_state st;
         if (qrtcan_heartbeat_decode(f, &node, &st) == QRTCAN_OK &&
-            node != d->cfg.node &&
-            (d->cfg.master_node == 0 || node == d->cfg.master_node) &&
-            d->nmt == QRTCAN_NMT_OPERATIONAL) {
-            alive(d, can);
+            node != d->cfg.node) {
+            heartbeat_seen(d, node, now(can));
         }
         break;
     }
@@ -564,32 +637,66 @@ static void profile_step(struct drive *d, double dt)
     d->vel = dir * speed;
 }
 
-static void watchdog(struct drive *d, const struct can_driver *can, uint64_t t)
+/* The connection to the master is lost (a watched heartbeat or the SYNC
+ * missing): EMCY 0x8130 and the error register's communication bit, and
+ * where the power stage drives the motor (Operation Enabled, or Quick Stop
+ * Active still ramping or holding) the abort connection option 0x6007
+ * acts as the device control command it names. */
+static void abort_connection(struct drive *d, const struct can_driver *can)
 {
-    if (d->watchdog_ms == 0 || d->nmt != QRTCAN_NMT_OPERATIONAL ||
-        d->last_alive_us == 0 || d->watchdog_tripped ||
-        t - d->last_alive_us <= (uint64_t)d->watchdog_ms * 1000u) {
-        return;
-    }
-    d->watchdog_tripped = 1;
     d->error_register |= QRTCAN_ERRREG_COMM;
-    if (d->state == QRTCAN_402_OPERATION_ENABLED) {
+    if (d->state == QRTCAN_402_OPERATION_ENABLED ||
+        d->state == QRTCAN_402_QUICK_STOP_ACTIVE) {
         switch (d->abort_option) {
         case 1:
             enter_fault(d, QRTCAN_EMCY_HEARTBEAT, QRTCAN_ERRREG_COMM, can);
             return; /* enter_fault sent the EMCY */
         case 2:
             d->state = QRTCAN_402_SWITCH_ON_DISABLED;
-            d->vel = 0;
+            d->vel = 0; /* power stage off: the motor stops where it is */
+            d->moving = 0;
             break;
-        default:
+        case 3:
             d->state = QRTCAN_402_QUICK_STOP_ACTIVE;
+            d->moving = 0;
+            break;
+        default: /* 0: no action */
             break;
         }
-        d->moving = 0;
     }
     update_statusword(d);
     send_emcy(d, can, QRTCAN_EMCY_HEARTBEAT);
+}
+
+/* The vendor watchdog 0x2000: SYNC comes from the master alone, so its
+ * absence while operational means the master (or the bus) is gone. Armed
+ * by the first SYNC after NMT start. */
+static void watchdog(struct drive *d, const struct can_driver *can, uint64_t t)
+{
+    if (d->watchdog_ms == 0 || d->nmt != QRTCAN_NMT_OPERATIONAL ||
+        d->last_sync_us == 0 || d->watchdog_tripped ||
+        t - d->last_sync_us <= (uint64_t)d->watchdog_ms * 1000u) {
+        return;
+    }
+    d->watchdog_tripped = 1;
+    abort_connection(d, can);
+}
+
+/* The heartbeat consumer 0x1016: an armed entry whose node has sent no
+ * heartbeat for longer than the entry's time is a heartbeat event, once;
+ * the entry waits for the node's next heartbeat to re-arm. */
+static void heartbeat_consumer(struct drive *d, const struct can_driver *can,
+                               uint64_t t)
+{
+    unsigned i;
+    for (i = 0; i < DRIVE_HB_CONSUMERS; i++) {
+        uint64_t limit_us = (uint64_t)(d->hb_consumer[i] & 0xFFFFu) * 1000u;
+        if (d->hb_watch[i] == (uint8_t)DRIVE_HB_ARMED &&
+            t - d->hb_seen_us[i] > limit_us) {
+            d->hb_watch[i] = (uint8_t)DRIVE_HB_EXPIRED;
+            abort_connection(d, can);
+        }
+    }
 }
 
 void drive_tick(struct drive *d, const struct can_driver *can)
@@ -623,6 +730,7 @@ void drive_tick(struct drive *d, const struct can_driver *can)
         break;
     }
     watchdog(d, can, t);
+    heartbeat_consumer(d, can, t);
     update_statusword(d);
     if (d->heartbeat_ms != 0 && t >= d->next_heartbeat_us) {
         if (qrtcan_heartbeat_encode(d->cfg.node, (enum qrtcan_nmt_state)d->nmt,

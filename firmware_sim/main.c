@@ -71,12 +71,11 @@ static void usage(FILE *out)
         "                        target + COUNTS (0x2001, default 0)\n"
         "  --heartbeat-ms MS     heartbeat producer time (0x1017, default "
         "100)\n"
-        "  --watchdog-ms MS      no SYNC and no master heartbeat for MS while\n"
-        "                        operational -> EMCY 0x8130 and quick stop\n"
-        "                        (0x2000; default 500; 0 = off)\n"
-        "  --master-id ID        only this node's heartbeat feeds the "
-        "watchdog\n"
-        "                        (default: any node that is not a drive here)\n"
+        "  --watchdog-ms MS      vendor SYNC watchdog (0x2000): no SYNC for "
+        "MS\n"
+        "                        while operational -> EMCY 0x8130 and the\n"
+        "                        reaction of 0x6007 (default 500; 0 = off);\n"
+        "                        heartbeats do not feed it\n"
         "  --fault-at SECONDS    inject a drive fault SECONDS after start\n"
         "  --fault-node ID       which node faults (default the first)\n"
         "  --fault-code HEX      its EMCY error code (default 0x2310, over "
@@ -90,6 +89,16 @@ static void usage(FILE *out)
         "  --verbose             log every CiA 402 state change on stderr\n"
         "  --help                this text\n"
         "  --version             the version\n"
+        "\n"
+        "Heartbeat consumer (0x1016:1..4, CiA 301): empty at power-up, as on\n"
+        "real drives; an entry is (node id << 16) | time in ms, written by "
+        "the\n"
+        "master over SDO. Once the entry's node has sent a heartbeat, none "
+        "from\n"
+        "that node for the time -> EMCY 0x8130 and, in Operation Enabled or\n"
+        "Quick Stop Active, the abort connection option (0x6007: 0 no action,\n"
+        "1 fault, 2 disable voltage, 3 quick stop, the default). Only the\n"
+        "entry's node feeds it, never another drive's heartbeat.\n"
         "\n"
         "Object dictionary, PDO mapping and EMCY codes: can/servo_sim.eds and\n"
         "firmware_sim/README.md.\n",
@@ -178,7 +187,7 @@ int main(int argc, char **argv)
     const char *iface = "vcan0";
     double counts_per_deg[3] = {1000, 1000, 1000}, offset_counts[3] = {0, 0, 0};
     double fault_at = -1, mute_at = 0, duration = 0;
-    long servo_error = 0, heartbeat_ms = 100, watchdog_ms = 500, master = 0;
+    long servo_error = 0, heartbeat_ms = 100, watchdog_ms = 500;
     long fault_node = 0, fault_code = QRTCAN_EMCY_OVERCURRENT, mute_node = 0;
     long lim_id[MAX_DRIVES];
     long lim_min[MAX_DRIVES], lim_max[MAX_DRIVES];
@@ -242,8 +251,6 @@ int main(int argc, char **argv)
             bad = parse_long(v, 0, 65535, &heartbeat_ms);
         } else if (strcmp(o, "--watchdog-ms") == 0) {
             bad = parse_long(v, 0, 3600000, &watchdog_ms);
-        } else if (strcmp(o, "--master-id") == 0) {
-            bad = parse_long(v, 1, 127, &master);
         } else if (strcmp(o, "--fault-at") == 0) {
             bad = parse_seconds(v, &fault_at);
         } else if (strcmp(o, "--fault-node") == 0) {
@@ -326,7 +333,6 @@ int main(int argc, char **argv)
         cfg[i].servo_error = (int32_t)servo_error;
         cfg[i].watchdog_ms = (uint32_t)watchdog_ms;
         cfg[i].heartbeat_ms = (uint16_t)heartbeat_ms;
-        cfg[i].master_node = (unsigned)master;
         drive_init(&drives[i], &cfg[i], &can);
         seen[i] = drives[i].state;
     }

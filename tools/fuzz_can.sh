@@ -16,11 +16,13 @@ printf '\x00\x00\x02\x01\x00\x00\x00\x00\x00\x00\x00\x02\x01\x06\x06\x00\x00\x00
     >"$out/corpus_can/enable"
 # the closed loop (tests/fuzz/fuzz_can.c) brought up and moving: 300 frames
 # the master ignores, 5 ms apart, a path at the 200th, a quick stop at the
-# 260th (data bytes 7 and 8 carry the command)
+# 260th, the host watchdog at the 280th (data bytes 7 and 8 carry the
+# command)
 for i in $(seq 1 300); do
     case $i in
     200) cmd='\x01\x01' ;;
     260) cmd='\x02\x01' ;;
+    280) cmd='\x08\x01' ;;
     *) cmd='\x00\x00' ;;
     esac
     printf "\x07\xff\x50\x00\x00\x00\x00\x00\x00$cmd"

@@ -43,8 +43,12 @@ struct qrtcan_master_config {
     /* [joint][lo, hi] in degrees: no path leaves them (default design.md
      * section 3's). Alpha wraps, and is not limited, iff [-180, 180]. */
     double limit_deg[QRTCAN_JOINTS][2];
-    uint32_t sync_period_us;       /* SYNC + RPDO cycle (default 10 ms) */
-    uint32_t master_heartbeat_us;  /* our heartbeat period (100 ms) */
+    uint32_t sync_period_us;      /* SYNC + RPDO cycle (default 10 ms) */
+    uint32_t master_heartbeat_us; /* our heartbeat period (100 ms) */
+    /* how long each drive waits for our heartbeat before it takes its abort
+     * connection option: written to its heartbeat consumer 0x1016:1 at
+     * bring-up; more than one heartbeat period (3 periods: 300 ms) */
+    uint16_t consumer_heartbeat_ms;
     uint16_t drive_heartbeat_ms;   /* asked of each drive (0x1017) (50) */
     uint32_t heartbeat_timeout_us; /* drive declared lost after (300 ms) */
     uint32_t sdo_timeout_us;       /* one SDO attempt (50 ms) */
@@ -76,7 +80,8 @@ enum qrtcan_master_reason {
     QRTCAN_REASON_SDO_ABORT,      /* a drive refused a configuration write */
     QRTCAN_REASON_ENABLE_TIMEOUT, /* Operation Enabled not reached in time */
     QRTCAN_REASON_BUS,            /* the caller reported a bus error */
-    QRTCAN_REASON_SHUTDOWN
+    QRTCAN_REASON_SHUTDOWN,
+    QRTCAN_REASON_HOST_WATCHDOG /* qrtcan_master_set_host_alive(m, 0) */
 };
 
 struct qrtcan_drive {
@@ -113,8 +118,10 @@ struct qrtcan_master_status {
     int path_done; /* the last path reached its goal */
     unsigned long frames_in, frames_ignored, frames_malformed;
     unsigned long frames_out, frames_dropped; /* outbox overflow */
-    unsigned long frames_withdrawn; /* drive commands a stop made stale */
+    unsigned long frames_withdrawn;           /* frames a stop made stale */
     unsigned long recoveries;
+    int host_alive;         /* qrtcan_master_set_host_alive's last word */
+    int heartbeat_produced; /* the master produces its heartbeat now */
 };
 
 struct qrtcan_master {
@@ -124,7 +131,8 @@ struct qrtcan_master {
     unsigned reason_node;
     uint16_t reason_code;
     uint64_t state_since_us, last_sync_us, last_heartbeat_us;
-    int started; /* the caller wants the drives enabled */
+    int started;    /* the caller wants the drives enabled */
+    int host_alive; /* the caller's guarding threads run (power-up: 1) */
     struct qrtcan_drive drive[QRTCAN_JOINTS];
     /* the path: waypoints in degrees, the segment being executed */
     double path_deg[QRTCAN_MASTER_MAX_WAYPOINTS][QRTCAN_JOINTS];
@@ -144,18 +152,22 @@ struct qrtcan_master {
 };
 
 /* QRTCAN_E_ARG for invalid node ids (0, > 127, repeated), bad scales,
- * non-positive speeds or zero periods. */
+ * non-positive speeds, zero periods, or a consumer heartbeat time that is
+ * zero or not above the master's heartbeat period. */
 int qrtcan_master_init(struct qrtcan_master *m,
                        const struct qrtcan_master_config *cfg, uint64_t now_us);
 
-/* Bring the drives up (NMT, profile position mode, heartbeats) and enable
- * them; the master then holds their position until a path arrives. */
+/* Bring the drives up (NMT, profile position mode, heartbeats, each
+ * drive's heartbeat consumer set to watch ours and its abort connection
+ * option set to quick stop, both read back) and enable them; the master
+ * then holds their position until a path arrives. A drive that refuses
+ * any of it is never enabled (QRTCAN_REASON_SDO_ABORT). */
 void qrtcan_master_start(struct qrtcan_master *m, uint64_t now_us);
 
 /* On shutdown: quick stop every drive and leave them holding position in
  * Quick Stop Active (not voltage off: an arm without brakes would fall).
- * The master then stops its SYNC and heartbeat, so the drives' own
- * communication watchdogs take over. */
+ * The master then stops its SYNC and heartbeat, so each drive's heartbeat
+ * consumer (0x1016) and SYNC watchdog take over. */
 void qrtcan_master_shutdown(struct qrtcan_master *m, uint64_t now_us);
 
 /* A path to execute from where the arm stands. waypoints[0] must be the
@@ -166,8 +178,9 @@ void qrtcan_master_shutdown(struct qrtcan_master *m, uint64_t now_us);
  * guard, not the only one). Accepted only with the
  * arm at rest: READY, or STOPPED once every drive reports its quick stop
  * finished (target reached); QRTCAN_E_CMD otherwise (MOVING: stop first,
- * or wait for the path to finish). QRTCAN_E_ARG for n outside
- * 1..QRTCAN_MASTER_MAX_WAYPOINTS or non-finite values. */
+ * or wait for the path to finish; or the host watchdog holds the arm).
+ * QRTCAN_E_ARG for n outside 1..QRTCAN_MASTER_MAX_WAYPOINTS or non-finite
+ * values. */
 int qrtcan_master_set_path(struct qrtcan_master *m, const double (*wp)[3],
                            int n, uint64_t now_us);
 
@@ -184,6 +197,17 @@ int qrtcan_path_outside_limits(const struct qrtcan_master_config *cfg,
 /* Stop now: quick stop to every drive, queued ahead of anything else. The
  * master stays STOPPED until the next path (which re-enables the drives). */
 void qrtcan_master_quick_stop(struct qrtcan_master *m, uint64_t now_us);
+
+/* The host's own watchdog: the threads that guard motion on the
+ * computer running this master. With alive = 0 the master stops
+ * producing its heartbeat, so that every drive's heartbeat consumer
+ * (0x1016) expires and the drive takes its abort connection option
+ * (0x6007, quick stop); the master also quick-stops the drives itself
+ * (reason QRTCAN_REASON_HOST_WATCHDOG), refuses paths (QRTCAN_E_CMD) and
+ * does not bring the drives up again until alive = 1. The SYNC goes on,
+ * so that the drives' positions are still read. */
+void qrtcan_master_set_host_alive(struct qrtcan_master *m, int alive,
+                                  uint64_t now_us);
 
 /* The caller's CAN layer failed (interface down, bus-off, no buffer):
  * treated as losing every drive; recovery starts when frames flow again. */

@@ -41,6 +41,8 @@ struct qrtcan_sdo {
 #define QRTCAN_SDO_ABORT_WRITE_ONLY 0x06010001u
 #define QRTCAN_SDO_ABORT_READ_ONLY 0x06010002u
 #define QRTCAN_SDO_ABORT_NO_OBJECT 0x06020000u
+/* general parameter incompatibility */
+#define QRTCAN_SDO_ABORT_INCOMPATIBLE 0x06040043u
 #define QRTCAN_SDO_ABORT_LENGTH 0x06070010u /* data type length mismatch */
 #define QRTCAN_SDO_ABORT_NO_SUBINDEX 0x06090011u
 #define QRTCAN_SDO_ABORT_VALUE 0x06090030u /* value range exceeded */

@@ -10,7 +10,9 @@
 #include "qrtcan/sync.h"
 
 /* Objects of the drives (CiA 301 / 402). */
+#define OD_HB_CONSUMER 0x1016u
 #define OD_HEARTBEAT 0x1017u
+#define OD_ABORT_OPTION 0x6007u
 #define OD_MODE 0x6060u
 #define OD_MODE_DISPLAY 0x6061u
 #define OD_POSITION_ACTUAL 0x6064u
@@ -19,6 +21,9 @@
 #define OD_PROFILE_DECEL 0x6084u
 
 #define CW_ENABLED QRTCAN_CW_CMD_ENABLE_OPERATION
+/* 0x6007's quick stop: a drive that loses our heartbeat ramps down and
+ * holds under torque (the arm has no brakes) */
+#define ABORT_OPTION_QUICK_STOP 3u
 
 /* A path's first waypoint must be where the arm is (the daemon plans from
  * the measured joints): a larger gap would be an unplanned motion. */
@@ -26,25 +31,36 @@
 /* waypoints written as text and read back may stray this far past a limit */
 #define LIMIT_SLACK_DEG 1e-6
 
-/* One step of an SDO sequence: write value (size bytes) or read. */
+/* One step of an SDO sequence: write the step's value (size bytes), or
+ * read; a read with check set must answer the step's value (size bytes),
+ * else the drive did not keep what it was told and is not brought up. */
 struct sdo_step {
     uint16_t index;
+    uint8_t subindex;
     int write;
     uint8_t size;
+    int check;
 };
 
+/* The safety settings are written and read back before the mode and NMT
+ * start: a drive that would not stop when our heartbeat stops is never
+ * enabled. */
 static const struct sdo_step bringup[] = {
-    {OD_HEARTBEAT, 1, 2},
-    {OD_MODE, 1, 1},
-    {OD_MODE_DISPLAY, 0, 1},
-    {OD_POSITION_ACTUAL, 0, 4},
+    {OD_HEARTBEAT, 0, 1, 2, 0},       /* the drive's heartbeat period */
+    {OD_HB_CONSUMER, 1, 1, 4, 0},     /* watch our heartbeat ... */
+    {OD_HB_CONSUMER, 1, 0, 4, 1},     /* ... read back */
+    {OD_ABORT_OPTION, 0, 1, 2, 0},    /* quick stop without it ... */
+    {OD_ABORT_OPTION, 0, 0, 2, 1},    /* ... read back */
+    {OD_MODE, 0, 1, 1, 0},            /* profile position ... */
+    {OD_MODE_DISPLAY, 0, 0, 1, 1},    /* ... in force */
+    {OD_POSITION_ACTUAL, 0, 0, 4, 0}, /* where to hold */
 };
 #define BRINGUP_STEPS (sizeof bringup / sizeof bringup[0])
 
 static const struct sdo_step profile[] = {
-    {OD_PROFILE_VELOCITY, 1, 4},
-    {OD_PROFILE_ACCEL, 1, 4},
-    {OD_PROFILE_DECEL, 1, 4},
+    {OD_PROFILE_VELOCITY, 0, 1, 4, 0},
+    {OD_PROFILE_ACCEL, 0, 1, 4, 0},
+    {OD_PROFILE_DECEL, 0, 1, 4, 0},
 };
 #define PROFILE_STEPS (sizeof profile / sizeof profile[0])
 
@@ -68,6 +84,7 @@ void qrtcan_master_config_default(struct qrtcan_master_config *cfg)
     cfg->master_node = 127;
     cfg->sync_period_us = 10000;
     cfg->master_heartbeat_us = 100000;
+    cfg->consumer_heartbeat_ms = 300;
     cfg->drive_heartbeat_ms = 50;
     cfg->heartbeat_timeout_us = 300000;
     cfg->sdo_timeout_us = 50000;
@@ -154,12 +171,15 @@ static void enter(struct qrtcan_master *m, enum qrtcan_master_state s,
     m->state_since_us = now_us;
 }
 
-/* Is f a command to one of our drives that a stop makes stale: an RPDO1
- * (controlword and target) or an SDO request? */
-static int commands_drive(const struct qrtcan_master *m,
-                          const struct qrtcan_frame *f)
+/* Is f a frame that a stop makes stale: a command to one of our drives (an
+ * RPDO1, controlword and target, or an SDO request), or, while the host
+ * watchdog holds our heartbeat back, a heartbeat of ours queued before it
+ * tripped (it would feed the drives' consumers on)? */
+static int stale(const struct qrtcan_master *m, const struct qrtcan_frame *f)
 {
     int j;
+    if (!m->host_alive && f->id == QRTCAN_FN_HEARTBEAT + m->cfg.master_node)
+        return 1;
     for (j = 0; j < QRTCAN_JOINTS; j++)
         if (f->id == QRTCAN_FN_RPDO1 + m->drive[j].node ||
             f->id == QRTCAN_FN_RSDO + m->drive[j].node)
@@ -167,17 +187,17 @@ static int commands_drive(const struct qrtcan_master *m,
     return 0;
 }
 
-/* Take the stale drive commands out of the outbox, keeping the order of the
- * rest (SYNC, heartbeat, NMT). A set-point RPDO sent after a quick stop
- * carries "enable operation" and would take the drive straight back out of
- * Quick Stop Active (CiA 402 transition 16) and on toward its old target. */
-static void withdraw_drive_commands(struct qrtcan_master *m)
+/* Take the stale frames out of the outbox, keeping the order of the rest
+ * (SYNC, heartbeat, NMT). A set-point RPDO sent after a quick stop carries
+ * "enable operation" and would take the drive straight back out of Quick
+ * Stop Active (CiA 402 transition 16) and on toward its old target. */
+static void withdraw_stale(struct qrtcan_master *m)
 {
     int i, kept = 0;
     for (i = 0; i < m->out_count; i++) {
         const struct qrtcan_frame *f =
             &m->out[(m->out_head + i) % QRTCAN_MASTER_OUTBOX];
-        if (commands_drive(m, f)) {
+        if (stale(m, f)) {
             m->frames_withdrawn++;
             continue;
         }
@@ -191,7 +211,7 @@ static void withdraw_drive_commands(struct qrtcan_master *m)
 static void stop_all(struct qrtcan_master *m)
 {
     int j;
-    withdraw_drive_commands(m);
+    withdraw_stale(m);
     for (j = QRTCAN_JOINTS - 1; j >= 0; j--) {
         m->drive[j].controlword = QRTCAN_CW_CMD_QUICK_STOP;
         send_rpdo(m, j, 1);
@@ -232,6 +252,9 @@ int qrtcan_master_init(struct qrtcan_master *m,
     int j, k;
     if (!m || !cfg || !qrtcan_node_valid(cfg->master_node) ||
         cfg->sync_period_us == 0 || cfg->master_heartbeat_us == 0 ||
+        cfg->consumer_heartbeat_ms == 0 ||
+        (uint64_t)cfg->consumer_heartbeat_ms * 1000u <=
+            cfg->master_heartbeat_us ||
         cfg->sdo_timeout_us == 0 || cfg->sdo_attempts == 0 ||
         cfg->heartbeat_timeout_us == 0 || !qrtcan_limits_valid(cfg->limit_deg))
         return QRTCAN_E_ARG;
@@ -250,6 +273,7 @@ int qrtcan_master_init(struct qrtcan_master *m,
     }
     memset(m, 0, sizeof *m);
     m->cfg = *cfg;
+    m->host_alive = 1;
     for (j = 0; j < QRTCAN_JOINTS; j++) {
         m->drive[j].node = cfg->node[j];
         m->drive[j].nmt_state = -1;
@@ -264,6 +288,13 @@ void qrtcan_master_start(struct qrtcan_master *m, uint64_t now_us)
 {
     m->started = 1;
     m->reason = QRTCAN_REASON_NONE;
+    if (!m->host_alive) {
+        /* no bring-up while the host's guards are stalled: the fault's
+         * retry starts it once they run again */
+        m->reason = QRTCAN_REASON_HOST_WATCHDOG;
+        enter(m, QRTCAN_MASTER_FAULT, now_us);
+        return;
+    }
     begin_bringup(m, now_us);
 }
 
@@ -283,11 +314,55 @@ void qrtcan_master_quick_stop(struct qrtcan_master *m, uint64_t now_us)
     if (m->state == QRTCAN_MASTER_OFF || m->state == QRTCAN_MASTER_FAULT)
         return;
     m->n_waypoints = 0;
-    m->reason = QRTCAN_REASON_COMMANDED;
+    if (m->host_alive) { /* else the host watchdog's stop is the reason */
+        m->reason = QRTCAN_REASON_COMMANDED;
+        m->reason_node = 0;
+        m->reason_code = 0;
+    }
+    stop_all(m);
+    enter(m, QRTCAN_MASTER_STOPPED, now_us);
+}
+
+static void push_heartbeat(struct qrtcan_master *m, uint64_t now_us)
+{
+    struct qrtcan_frame f;
+    m->last_heartbeat_us = now_us;
+    if (qrtcan_heartbeat_encode(m->cfg.master_node, QRTCAN_NMT_OPERATIONAL,
+                                &f) == QRTCAN_OK)
+        push(m, &f);
+}
+
+void qrtcan_master_set_host_alive(struct qrtcan_master *m, int alive,
+                                  uint64_t now_us)
+{
+    if (!alive == !m->host_alive)
+        return; /* no news: the stop is queued once, not at every call */
+    m->host_alive = alive != 0;
+    if (!alive)
+        withdraw_stale(m); /* our heartbeats still queued, at least */
+    if (m->state == QRTCAN_MASTER_OFF)
+        return; /* shut down or not started: the drives are not ours */
+    if (alive) {
+        /* the next tick's heartbeat (a period has passed) re-arms the
+         * drives' consumers; the arm stays stopped until the next path,
+         * and a fault's retry waits its full time from now */
+        if (m->state == QRTCAN_MASTER_FAULT)
+            m->state_since_us = now_us;
+        return;
+    }
+    m->n_waypoints = 0;
+    m->reason = QRTCAN_REASON_HOST_WATCHDOG;
     m->reason_node = 0;
     m->reason_code = 0;
     stop_all(m);
-    enter(m, QRTCAN_MASTER_STOPPED, now_us);
+    /* enabled drives hold in Quick Stop Active and a path after alive = 1
+     * restarts them; a bring-up cut short is done again whole, after a
+     * fault's retry */
+    if (m->state == QRTCAN_MASTER_READY || m->state == QRTCAN_MASTER_MOVING ||
+        m->state == QRTCAN_MASTER_STOPPED)
+        enter(m, QRTCAN_MASTER_STOPPED, now_us);
+    else if (m->state != QRTCAN_MASTER_FAULT)
+        enter(m, QRTCAN_MASTER_FAULT, now_us);
 }
 
 void qrtcan_master_bus_error(struct qrtcan_master *m, uint64_t now_us)
@@ -370,7 +445,9 @@ int qrtcan_master_set_path(struct qrtcan_master *m, const double (*wp)[3],
                 return QRTCAN_E_ARG;
     if (qrtcan_path_outside_limits(&m->cfg, wp, n) >= 0)
         return QRTCAN_E_RANGE;
-    if (m->state != QRTCAN_MASTER_READY && m->state != QRTCAN_MASTER_STOPPED)
+    if ((m->state != QRTCAN_MASTER_READY &&
+         m->state != QRTCAN_MASTER_STOPPED) ||
+        !m->host_alive)
         return QRTCAN_E_CMD;
     if (m->state == QRTCAN_MASTER_STOPPED &&
         !all_bits(m, QRTCAN_SW_TARGET_REACHED, 1))
@@ -467,7 +544,7 @@ static void sdo_send(struct qrtcan_master *m, int j, const struct sdo_step *st,
     struct qrtcan_frame f;
     s.type = st->write ? QRTCAN_SDO_WRITE : QRTCAN_SDO_READ;
     s.index = st->index;
-    s.subindex = 0;
+    s.subindex = st->subindex;
     s.size = st->write ? st->size : 0;
     s.data = st->write ? value : 0;
     if (qrtcan_sdo_encode_request(m->drive[j].node, &s, &f) != QRTCAN_OK)
@@ -477,13 +554,36 @@ static void sdo_send(struct qrtcan_master *m, int j, const struct sdo_step *st,
     m->drive[j].sdo_sent_us = now_us;
 }
 
+/* What a bring-up step writes, or what its checked read must answer. */
 static uint32_t bringup_value(const struct qrtcan_master *m, unsigned step)
 {
-    if (bringup[step].index == OD_HEARTBEAT)
+    switch (bringup[step].index) {
+    case OD_HEARTBEAT:
         return m->cfg.drive_heartbeat_ms;
-    if (bringup[step].index == OD_MODE)
+    case OD_HB_CONSUMER: /* CiA 301: node id in bits 23..16, ms in 15..0 */
+        return ((uint32_t)m->cfg.master_node << 16) |
+               (uint32_t)m->cfg.consumer_heartbeat_ms;
+    case OD_ABORT_OPTION:
+        return ABORT_OPTION_QUICK_STOP;
+    case OD_MODE:
+    case OD_MODE_DISPLAY:
         return QRTCAN_MODE_PROFILE_POSITION;
-    return 0;
+    default:
+        return 0;
+    }
+}
+
+/* The low size bytes of v (an SDO value of that size). */
+static uint32_t sized(uint32_t v, uint8_t size)
+{
+    switch (size) {
+    case 1:
+        return v & 0xFFu;
+    case 2:
+        return v & 0xFFFFu;
+    default:
+        return v;
+    }
 }
 
 /* Next step of each drive's SDO sequence; returns whether all are done. */
@@ -530,7 +630,8 @@ static void sdo_answer(struct qrtcan_master *m, int j,
         return;
     }
     if (!d->sdo_waiting || d->sdo_step >= n ||
-        s->index != steps[d->sdo_step].index || s->subindex != 0) {
+        s->index != steps[d->sdo_step].index ||
+        s->subindex != steps[d->sdo_step].subindex) {
         m->frames_ignored++;
         return;
     }
@@ -544,9 +645,11 @@ static void sdo_answer(struct qrtcan_master *m, int j,
         m->frames_malformed++;
         return;
     }
-    if (steps == bringup && s->index == OD_MODE_DISPLAY &&
-        (s->data & 0xFFu) != QRTCAN_MODE_PROFILE_POSITION) {
-        fail(m, QRTCAN_REASON_SDO_ABORT, d->node, OD_MODE_DISPLAY, now_us);
+    if (steps == bringup && steps[d->sdo_step].check &&
+        sized(s->data, steps[d->sdo_step].size) !=
+            sized(bringup_value(m, d->sdo_step), steps[d->sdo_step].size)) {
+        fail(m, QRTCAN_REASON_SDO_ABORT, d->node, steps[d->sdo_step].index,
+             now_us);
         return;
     }
     if (steps == bringup && s->index == OD_POSITION_ACTUAL) {
@@ -659,13 +762,12 @@ void qrtcan_master_tick(struct qrtcan_master *m, uint64_t now_us)
     int j;
     if (m->state == QRTCAN_MASTER_OFF && !m->started)
         return;
-    /* our heartbeat and the SYNC keep the drives' watchdogs fed */
-    if (now_us - m->last_heartbeat_us >= m->cfg.master_heartbeat_us) {
-        m->last_heartbeat_us = now_us;
-        if (qrtcan_heartbeat_encode(m->cfg.master_node, QRTCAN_NMT_OPERATIONAL,
-                                    &f) == QRTCAN_OK)
-            push(m, &f);
-    }
+    /* our heartbeat feeds the drives' heartbeat consumers, the SYNC their
+     * SYNC watchdogs; a stalled host stops the heartbeat alone, so that
+     * the drives stop by themselves while their positions are still read */
+    if (m->host_alive &&
+        now_us - m->last_heartbeat_us >= m->cfg.master_heartbeat_us)
+        push_heartbeat(m, now_us);
     if (now_us - m->last_sync_us >= m->cfg.sync_period_us) {
         m->last_sync_us = now_us;
         if (qrtcan_sync_encode(0, &f) == QRTCAN_OK)
@@ -684,13 +786,18 @@ void qrtcan_master_tick(struct qrtcan_master *m, uint64_t now_us)
             m->drive[j].controlword = QRTCAN_CW_CMD_QUICK_STOP;
         break;
     case QRTCAN_MASTER_FAULT:
-        if (m->started && now_us - m->state_since_us >= m->cfg.retry_after_us) {
+        if (m->started && m->host_alive &&
+            now_us - m->state_since_us >= m->cfg.retry_after_us) {
             m->recoveries++;
             begin_bringup(m, now_us);
         }
         break;
     case QRTCAN_MASTER_STARTING:
         if (run_sdo(m, bringup, BRINGUP_STEPS, NULL, now_us)) {
+            /* a drive's consumer watches from our first heartbeat after
+             * 0x1016 was written: one now, ahead of NMT start, so that no
+             * drive is enabled unwatched */
+            push_heartbeat(m, now_us);
             for (j = 0; j < QRTCAN_JOINTS; j++) {
                 if (qrtcan_nmt_encode(QRTCAN_NMT_START, m->drive[j].node, &f) ==
                     QRTCAN_OK)
@@ -821,7 +928,10 @@ int qrtcan_master_on_frame(struct qrtcan_master *m,
         if (rc != QRTCAN_OK)
             break;
         m->drive[j].last_emcy = e.code;
+        /* a heartbeat event while the host watchdog holds our heartbeat
+         * back is the stop we asked for, not a drive fault */
         if (e.code != QRTCAN_EMCY_NO_ERROR &&
+            (m->host_alive || e.code != QRTCAN_EMCY_HEARTBEAT) &&
             (m->state == QRTCAN_MASTER_READY ||
              m->state == QRTCAN_MASTER_MOVING ||
              m->state == QRTCAN_MASTER_STOPPED))
@@ -869,6 +979,9 @@ void qrtcan_master_get_status(const struct qrtcan_master *m,
     st->frames_dropped = m->frames_dropped;
     st->frames_withdrawn = m->frames_withdrawn;
     st->recoveries = m->recoveries;
+    st->host_alive = m->host_alive;
+    st->heartbeat_produced =
+        m->host_alive && (m->state != QRTCAN_MASTER_OFF || m->started);
 }
 
 const char *qrtcan_master_state_name(enum qrtcan_master_state s)
@@ -913,6 +1026,8 @@ const char *qrtcan_master_reason_name(enum qrtcan_master_reason r)
         return "CAN bus error";
     case QRTCAN_REASON_SHUTDOWN:
         return "shut down";
+    case QRTCAN_REASON_HOST_WATCHDOG:
+        return "host watchdog: a guarding thread stalled";
     }
     return "unknown";
 }

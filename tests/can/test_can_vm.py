@@ -120,6 +120,21 @@ def sdo_checks(node):
     node.sdo[0x1017].raw = 50
     check(node.sdo[0x1017].raw == 50, f"node {n} 0x1017 written and read back")
     node.sdo[0x1017].raw = 100
+    # the heartbeat consumer: empty at power-up, one entry per node
+    check(node.sdo[0x1016][0].raw == 4 and
+          all(node.sdo[0x1016][i].raw == 0 for i in range(1, 5)),
+          f"node {n} 0x1016 has 4 entries, all unused at power-up")
+    entry = (127 << 16) | 300
+    node.sdo[0x1016][1].raw = entry
+    check(node.sdo[0x1016][1].raw == entry, f"node {n} 0x1016:1 written and read back")
+    try:
+        node.sdo[0x1016][2].raw = (127 << 16) | 500
+        got = None
+    except SdoAbortedError as e:
+        got = e.code
+    check(got == 0x06040043,
+          f"node {n} a second 0x1016 entry for node 127 aborts 0x06040043")
+    node.sdo[0x1016][1].raw = 0
     node.sdo["Profile velocity"].raw = 120000
     check(node.sdo[0x6081].raw == 120000, f"node {n} 0x6081 written and read back")
     node.sdo[0x6083].raw = 360000

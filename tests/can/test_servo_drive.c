@@ -163,6 +163,233 @@ static void move_to(int32_t target, unsigned max_ms)
     }
 }
 
+/* A heartbeat of node, as if from another device on the bus. */
+static void heartbeat_from(unsigned node)
+{
+    struct qrtcan_frame f;
+    qrtcan_heartbeat_encode(node, QRTCAN_NMT_OPERATIONAL, &f);
+    drive_on_frame(&d, &f, &can);
+}
+
+/* What the drive did while run_bus ran. */
+struct seen {
+    unsigned emcy_8130;       /* EMCY 0x8130 frames sent */
+    uint64_t left_enabled_us; /* first tick out of Operation Enabled, 0 =
+                                 never */
+};
+
+/* ms milliseconds of bus: the drive ticks every millisecond, a SYNC comes
+ * every 10 ms (if sync) and a heartbeat every 50 ms from each of the n_hb
+ * nodes in hb; what the drive sends is looked at, then dropped. */
+static void run_bus(unsigned ms, int sync, const unsigned *hb, unsigned n_hb,
+                    struct seen *s)
+{
+    unsigned i, k;
+    for (i = 0; i < ms; i++) {
+        struct qrtcan_frame f;
+        bus.t += 1000;
+        if (sync && bus.t / 1000 % 10 == 0) {
+            qrtcan_sync_encode(0, &f);
+            drive_on_frame(&d, &f, &can);
+        }
+        for (k = 0; k < n_hb && bus.t / 1000 % 50 == 0; k++) {
+            heartbeat_from(hb[k]);
+        }
+        drive_tick(&d, &can);
+        for (k = 0; k < bus.n_out; k++) {
+            struct qrtcan_emcy e;
+            unsigned node;
+            if (bus.out[k].id == 0x081 &&
+                qrtcan_emcy_decode(&bus.out[k], &node, &e) == QRTCAN_OK &&
+                e.code == QRTCAN_EMCY_HEARTBEAT) {
+                s->emcy_8130++;
+            }
+        }
+        if (d.state != QRTCAN_402_OPERATION_ENABLED &&
+            s->left_enabled_us == 0) {
+            s->left_enabled_us = bus.t;
+        }
+        bus.n_out = 0;
+    }
+}
+
+/* A drive just powered up (SYNC watchdog 0x2000 as given, 0 = off), NMT
+ * started and enabled, at 0 counts. */
+static void fresh(uint32_t watchdog_ms)
+{
+    struct drive_config cfg;
+    memset(&cfg, 0, sizeof cfg);
+    cfg.node = 1;
+    cfg.limit_min = -400000;
+    cfg.limit_max = 400000;
+    cfg.watchdog_ms = watchdog_ms;
+    cfg.heartbeat_ms = 100;
+    bus.n_out = 0;
+    drive_init(&d, &cfg, &can);
+    nmt(QRTCAN_NMT_START);
+    enable();
+}
+
+static void start_move(int32_t target)
+{
+    rpdo(0x0F, target);
+    rpdo(0x1F, target); /* new setpoint */
+    rpdo(0x0F, target);
+    CHECK(d.moving);
+}
+
+/* CiA 301's heartbeat consumer (0x1016) and CiA 402's abort connection
+ * option (0x6007); the SYNC watchdog (0x2000) fed by SYNC alone. */
+static void heartbeat_consumer_tests(void)
+{
+    static const unsigned master[] = {127, 2, 3}, others[] = {2, 3};
+    const uint32_t entry = (127u << 16) | 300u;
+    struct qrtcan_sdo r;
+    struct seen s;
+    uint64_t t_last;
+    unsigned i;
+    int v;
+
+    /* power-up: four entries, all unused: with no master heartbeat at all
+     * the drive keeps moving and finishes its move, as a real drive with
+     * no 0x1016 configured does */
+    fresh(200);
+    r = sdo(QRTCAN_SDO_READ, 0x1016, 0, 0, 0);
+    CHECK(r.type == QRTCAN_SDO_READ_OK && r.size == 1 && r.data == 4);
+    for (i = 1; i <= 4; i++) {
+        r = sdo(QRTCAN_SDO_READ, 0x1016, (uint8_t)i, 0, 0);
+        CHECK(r.type == QRTCAN_SDO_READ_OK && r.size == 4 && r.data == 0);
+    }
+    r = sdo(QRTCAN_SDO_WRITE, 0x1016, 0, 1, 2);
+    CHECK(r.type == QRTCAN_SDO_ABORT && r.data == QRTCAN_SDO_ABORT_READ_ONLY);
+    start_move(90000);
+    memset(&s, 0, sizeof s);
+    run_bus(3000, 1, others, 2, &s);
+    CHECK(s.emcy_8130 == 0 && s.left_enabled_us == 0);
+    CHECK(!d.moving && d.position_actual == 90000);
+
+    /* entries: one per node; a second used entry for a node is refused
+     * (CiA 301: general parameter incompatibility), an unused one (time 0)
+     * or another node's is not; reserved bits 31..24 must be 0 */
+    r = sdo(QRTCAN_SDO_WRITE, 0x1016, 1, 4, entry);
+    CHECK(r.type == QRTCAN_SDO_WRITE_OK);
+    r = sdo(QRTCAN_SDO_READ, 0x1016, 1, 0, 0);
+    CHECK(r.type == QRTCAN_SDO_READ_OK && r.data == entry);
+    r = sdo(QRTCAN_SDO_WRITE, 0x1016, 2, 4, (127u << 16) | 500u);
+    CHECK(r.type == QRTCAN_SDO_ABORT &&
+          r.data == QRTCAN_SDO_ABORT_INCOMPATIBLE);
+    r = sdo(QRTCAN_SDO_READ, 0x1016, 2, 0, 0);
+    CHECK(r.type == QRTCAN_SDO_READ_OK && r.data == 0);
+    r = sdo(QRTCAN_SDO_WRITE, 0x1016, 2, 4, 127u << 16);
+    CHECK(r.type == QRTCAN_SDO_WRITE_OK);
+    r = sdo(QRTCAN_SDO_WRITE, 0x1016, 2, 4, (5u << 16) | 500u);
+    CHECK(r.type == QRTCAN_SDO_WRITE_OK);
+    r = sdo(QRTCAN_SDO_WRITE, 0x1016, 3, 4, (5u << 16) | 100u);
+    CHECK(r.type == QRTCAN_SDO_ABORT &&
+          r.data == QRTCAN_SDO_ABORT_INCOMPATIBLE);
+    r = sdo(QRTCAN_SDO_WRITE, 0x1016, 3, 4, 0x01000000u | (9u << 16) | 100u);
+    CHECK(r.type == QRTCAN_SDO_ABORT && r.data == QRTCAN_SDO_ABORT_VALUE);
+    r = sdo(QRTCAN_SDO_WRITE, 0x1016, 1, 4, entry); /* its own node again */
+    CHECK(r.type == QRTCAN_SDO_WRITE_OK);
+    r = sdo(QRTCAN_SDO_WRITE, 0x1016, 2, 4, 0);
+    CHECK(r.type == QRTCAN_SDO_WRITE_OK);
+
+    /* not monitored before its node's first heartbeat; other drives'
+     * heartbeats neither arm nor feed it */
+    memset(&s, 0, sizeof s);
+    run_bus(1000, 1, others, 2, &s);
+    CHECK(s.emcy_8130 == 0 && s.left_enabled_us == 0);
+    start_move(-300000);
+    run_bus(500, 1, master, 3, &s);
+    CHECK(s.emcy_8130 == 0 && d.moving);
+    heartbeat_from(127);
+    t_last = bus.t;
+    run_bus(1000, 1, others, 2, &s);
+    CHECK(d.state == QRTCAN_402_QUICK_STOP_ACTIVE);
+    CHECK(s.left_enabled_us > t_last + 300000u &&
+          s.left_enabled_us <= t_last + 301000u);
+    CHECK(s.emcy_8130 == 1);
+    CHECK(d.error_register & QRTCAN_ERRREG_COMM);
+    CHECK(d.vel == 0.0 && d.position_actual > -300000);
+    CHECK(d.hb_watch[0] == DRIVE_HB_EXPIRED);
+
+    /* heartbeats resume: the entry re-arms (no second event while they
+     * come), and fires again when they stop */
+    memset(&s, 0, sizeof s);
+    run_bus(600, 1, master, 3, &s);
+    CHECK(s.emcy_8130 == 0 && d.hb_watch[0] == DRIVE_HB_ARMED);
+    enable();
+    start_move(0);
+    run_bus(100, 1, master, 3, &s);
+    heartbeat_from(127);
+    t_last = bus.t;
+    memset(&s, 0, sizeof s);
+    run_bus(400, 1, others, 2, &s);
+    CHECK(d.state == QRTCAN_402_QUICK_STOP_ACTIVE && s.emcy_8130 == 1);
+    CHECK(s.left_enabled_us > t_last + 300000u &&
+          s.left_enabled_us <= t_last + 301000u);
+
+    /* reset communication restores the power-up 0x1016: no consumer */
+    nmt(QRTCAN_NMT_RESET_COMM);
+    r = sdo(QRTCAN_SDO_READ, 0x1016, 1, 0, 0);
+    CHECK(r.type == QRTCAN_SDO_READ_OK && r.data == 0);
+
+    /* 0x6007 takes 0..3 (0 is CiA 402's "no action") */
+    r = sdo(QRTCAN_SDO_WRITE, 0x6007, 0, 2, 4);
+    CHECK(r.type == QRTCAN_SDO_ABORT && r.data == QRTCAN_SDO_ABORT_VALUE);
+    r = sdo(QRTCAN_SDO_WRITE, 0x6007, 0, 2, 0xFFFF); /* -1 */
+    CHECK(r.type == QRTCAN_SDO_ABORT && r.data == QRTCAN_SDO_ABORT_VALUE);
+
+    /* each abort connection option, from the consumer alone (no SYNC
+     * watchdog) in the middle of a move */
+    for (v = 0; v <= 3; v++) {
+        fresh(0);
+        r = sdo(QRTCAN_SDO_WRITE, 0x6007, 0, 2, (uint32_t)v);
+        CHECK(r.type == QRTCAN_SDO_WRITE_OK);
+        r = sdo(QRTCAN_SDO_READ, 0x6007, 0, 0, 0);
+        CHECK(r.type == QRTCAN_SDO_READ_OK && r.data == (uint32_t)v);
+        r = sdo(QRTCAN_SDO_WRITE, 0x1016, 1, 4, (127u << 16) | 100u);
+        CHECK(r.type == QRTCAN_SDO_WRITE_OK);
+        heartbeat_from(127);
+        t_last = bus.t;
+        start_move(300000);
+        memset(&s, 0, sizeof s);
+        run_bus(120, 1, others, 2, &s);
+        CHECK(s.emcy_8130 == 1 && (d.error_register & QRTCAN_ERRREG_COMM));
+        run_bus(300, 1, others, 2, &s);
+        switch (v) {
+        case 0: /* the event is signalled, the motion goes on */
+            CHECK(d.state == QRTCAN_402_OPERATION_ENABLED && d.moving);
+            CHECK(s.left_enabled_us == 0);
+            break;
+        case 1: /* Fault Reaction Active (quick stop ramp), then Fault */
+            CHECK(d.state == QRTCAN_402_FAULT && d.vel == 0.0);
+            CHECK(d.error_code == QRTCAN_EMCY_HEARTBEAT);
+            break;
+        case 2: /* power stage off: the motor stops where it is */
+            CHECK(d.state == QRTCAN_402_SWITCH_ON_DISABLED && d.vel == 0.0);
+            break;
+        default: /* the quick stop ramp, then holding */
+            CHECK(d.state == QRTCAN_402_QUICK_STOP_ACTIVE && d.vel == 0.0);
+            break;
+        }
+        CHECK(v == 0 || (s.left_enabled_us > t_last + 100000u &&
+                         s.left_enabled_us <= t_last + 101000u && !d.moving));
+    }
+
+    /* the SYNC watchdog: heartbeats, the master's included, do not feed
+     * it; it trips its time after the last SYNC */
+    fresh(200);
+    start_move(300000);
+    memset(&s, 0, sizeof s);
+    run_bus(100, 1, master, 3, &s);
+    t_last = bus.t / 10000 * 10000; /* the last SYNC */
+    run_bus(400, 0, master, 3, &s);
+    CHECK(d.state == QRTCAN_402_QUICK_STOP_ACTIVE && s.emcy_8130 == 1);
+    CHECK(s.left_enabled_us > t_last + 200000u &&
+          s.left_enabled_us <= t_last + 201000u);
+}
+
 int main(void)
 {
     struct drive_config cfg;
@@ -318,6 +545,8 @@ int main(void)
     bus.n_out = 0;
     run_ms(500);
     CHECK(bus.n_out == 0);
+
+    heartbeat_consumer_tests();
 
     if (failures) {
         fprintf(stderr, "test_servo_drive: %d checks failed\n", failures);

@@ -10,7 +10,9 @@
 
 #include "../../firmware_sim/drive.h"
 #include "../unit/check.h"
+#include "qrtcan/emcy.h"
 #include "qrtcan/master.h"
+#include "qrtcan/sdo.h"
 
 #define BUS_MAX 4096
 #define STEP_US 250u
@@ -24,6 +26,88 @@ static double worst_off_line; /* degrees from the planned segment */
 static int torque_dropped;    /* a drive passed Switch On Disabled */
 static unsigned long frames_lost;
 static double peak_speed[3]; /* degrees a second, as the drives moved */
+
+/* What the master put on the bus, as step() delivers it */
+#define MASTER_HB_ID (QRTCAN_FN_HEARTBEAT + 127u)
+static unsigned long hb_frames, sync_frames;
+static uint64_t last_hb_us; /* the master's last heartbeat reached the drives */
+static double hb_deg[3];    /* the drives' joints at that moment */
+/* the SDO requests and NMT commands, in order, while recording */
+struct sent {
+    int nmt; /* 1: an NMT command (s unused) */
+    unsigned node;
+    struct qrtcan_sdo s;
+};
+static struct sent sent_log[256];
+static int n_sent, recording;
+/* an answer rewritten on its way to the master: a drive that reads back
+ * another value than it was told */
+static struct {
+    int on;
+    unsigned node;
+    uint16_t index;
+    uint8_t subindex;
+    uint32_t value;
+} tamper;
+
+static void observe(const struct qrtcan_frame *f)
+{
+    struct sent e;
+    int j;
+    if (f->id == MASTER_HB_ID) {
+        hb_frames++;
+        last_hb_us = clock_us;
+        for (j = 0; j < 3; j++)
+            hb_deg[j] = drives[j].pos / 1000.0;
+    }
+    if (f->id == QRTCAN_FN_SYNC_EMCY)
+        sync_frames++;
+    if (!recording || n_sent == 256)
+        return;
+    memset(&e, 0, sizeof e);
+    if (f->id == QRTCAN_FN_NMT && f->dlc == 2) {
+        e.nmt = 1;
+        e.node = f->data[1];
+        sent_log[n_sent++] = e;
+    } else if (qrtcan_sdo_decode_request(f, &e.node, &e.s) == QRTCAN_OK) {
+        sent_log[n_sent++] = e;
+    }
+}
+
+static void tamper_answer(struct qrtcan_frame *f)
+{
+    struct qrtcan_sdo s;
+    unsigned node;
+    if (!tamper.on || qrtcan_sdo_decode_response(f, &node, &s) != QRTCAN_OK ||
+        node != tamper.node || s.type != QRTCAN_SDO_READ_OK ||
+        s.index != tamper.index || s.subindex != tamper.subindex)
+        return;
+    s.data = tamper.value;
+    CHECK(qrtcan_sdo_encode_response(node, &s, f) == QRTCAN_OK, "tamper");
+}
+
+/* Where in sent_log node was sent this SDO request (from index from on),
+ * -1 if nowhere. */
+static int find_sdo(int from, unsigned node, enum qrtcan_sdo_type type,
+                    uint16_t index, uint8_t subindex)
+{
+    int i;
+    for (i = from < 0 ? 0 : from; i < n_sent; i++)
+        if (!sent_log[i].nmt && sent_log[i].node == node &&
+            sent_log[i].s.type == type && sent_log[i].s.index == index &&
+            sent_log[i].s.subindex == subindex)
+            return i;
+    return -1;
+}
+
+static int find_nmt(unsigned node)
+{
+    int i;
+    for (i = 0; i < n_sent; i++)
+        if (sent_log[i].nmt && sent_log[i].node == node)
+            return i;
+    return -1;
+}
 
 static int mem_send(void *ctx, const struct qrtcan_frame *f)
 {
@@ -65,20 +149,49 @@ static void step(void)
     clock_us += STEP_US;
     qrtcan_master_tick(&m, clock_us);
     n = qrtcan_master_take_frames(&m, out, QRTCAN_MASTER_OUTBOX);
-    for (i = 0; i < n; i++)
+    for (i = 0; i < n; i++) {
+        observe(&out[i]);
         for (j = 0; j < 3; j++)
             drive_on_frame(&drives[j], &out[i], &can);
+    }
     for (j = 0; j < 3; j++) {
         drive_tick(&drives[j], &can);
         if (fabs(drives[j].vel) / 1000.0 > peak_speed[j])
             peak_speed[j] = fabs(drives[j].vel) / 1000.0;
     }
     for (i = 0; i < bus_count; i++) {
+        tamper_answer(&bus[i]);
         qrtcan_master_on_frame(&m, &bus[i], clock_us);
         for (j = 0; j < 3; j++)
             drive_on_frame(&drives[j], &bus[i], &can);
     }
     bus_count = 0;
+}
+
+/* How many frames with this id the master's outbox holds. */
+static int queued(uint32_t id)
+{
+    int i, n = 0;
+    for (i = 0; i < m.out_count; i++)
+        n += m.out[(m.out_head + i) % QRTCAN_MASTER_OUTBOX].id == id;
+    return n;
+}
+
+/* One step of the drives alone, the master dead (no longer called): they
+ * still hear each other's heartbeats. Returns how many were sent. */
+static int step_drives_only(void)
+{
+    int i, j, heartbeats = 0;
+    clock_us += STEP_US;
+    for (j = 0; j < 3; j++)
+        drive_tick(&drives[j], &can);
+    for (i = 0; i < bus_count; i++) {
+        heartbeats += (bus[i].id & 0x780u) == QRTCAN_FN_HEARTBEAT;
+        for (j = 0; j < 3; j++)
+            drive_on_frame(&drives[j], &bus[i], &can);
+    }
+    bus_count = 0;
+    return heartbeats;
 }
 
 /* One SYNC period on the master's side only, so that the outbox holds the
@@ -216,7 +329,6 @@ static void power_up(const struct qrtcan_master_config *given)
         dc.servo_error = 3; /* 0.003 degrees */
         dc.watchdog_ms = 200;
         dc.heartbeat_ms = 0;
-        dc.master_node = 127;
         dc.start_position = 0;
         drive_init(&drives[j], &dc, &can);
     }
@@ -226,6 +338,35 @@ static void power_up(const struct qrtcan_master_config *given)
         qrtcan_master_config_default(&cfg);
     CHECK(qrtcan_master_init(&m, &cfg, clock_us) == QRTCAN_OK, "init");
     qrtcan_master_start(&m, clock_us);
+}
+
+/* Bring-up where a drive does not keep its safety settings: the master
+ * fails naming the drive and the object, and enables no drive, retry
+ * after retry. */
+static void refused(const char *what, unsigned node, uint16_t index)
+{
+    struct qrtcan_master_status st;
+    int i, j, enabled = 0;
+    CHECK(run_until(QRTCAN_MASTER_FAULT, 2.0), "%s: no fault", what);
+    qrtcan_master_get_status(&m, &st);
+    CHECK(st.reason == QRTCAN_REASON_SDO_ABORT && st.reason_node == node &&
+              st.reason_code == index,
+          "%s: %s, node %u, code %04x", what,
+          qrtcan_master_reason_name(st.reason), st.reason_node, st.reason_code);
+    for (i = 0; i < 16000; i++) { /* 4 s: retries every second */
+        step();
+        for (j = 0; j < 3; j++)
+            enabled |= drives[j].state == QRTCAN_402_OPERATION_ENABLED ||
+                       drives[j].nmt == QRTCAN_NMT_OPERATIONAL;
+        enabled |=
+            state() == QRTCAN_MASTER_ENABLING || state() == QRTCAN_MASTER_READY;
+    }
+    qrtcan_master_get_status(&m, &st);
+    CHECK(!enabled, "%s: a drive was started or enabled", what);
+    CHECK(st.recoveries >= 3 && st.reason == QRTCAN_REASON_SDO_ABORT &&
+              st.reason_node == node && st.reason_code == index,
+          "%s: after %lu retries %s node %u code %04x", what, st.recoveries,
+          qrtcan_master_reason_name(st.reason), st.reason_node, st.reason_code);
 }
 
 int main(void)
@@ -286,16 +427,60 @@ int main(void)
               "alpha 160 -> -160 would go the short way through 180");
     }
 
-    /* bring-up */
+    /* configuration refused: the drives' wait for our heartbeat must be
+     * longer than our heartbeat period */
+    qrtcan_master_config_default(&bad);
+    CHECK(bad.consumer_heartbeat_ms == 300, "default consumer time %u",
+          bad.consumer_heartbeat_ms);
+    bad.consumer_heartbeat_ms = 0;
+    CHECK(qrtcan_master_init(&m, &bad, 0) == QRTCAN_E_ARG, "consumer 0 ms");
+    bad.consumer_heartbeat_ms = 100;
+    CHECK(qrtcan_master_init(&m, &bad, 0) == QRTCAN_E_ARG,
+          "consumer time equal to the heartbeat period");
+    bad.consumer_heartbeat_ms = 101;
+    CHECK(qrtcan_master_init(&m, &bad, 0) == QRTCAN_OK, "consumer 101 ms");
+
+    /* bring-up: before NMT start, each drive is told to watch our
+     * heartbeat (0x1016:1 = node 127, 300 ms) and to quick-stop when it
+     * stops (0x6007 = 3), and both are read back */
+    n_sent = 0;
+    recording = 1;
     power_up(NULL);
     CHECK(run_until(QRTCAN_MASTER_READY, 2.0), "drives not enabled");
+    recording = 0;
     for (j = 0; j < 3; j++) {
+        unsigned node = (unsigned)j + 1;
+        int w1 = find_sdo(0, node, QRTCAN_SDO_WRITE, 0x1016, 1);
+        int r1 = find_sdo(w1, node, QRTCAN_SDO_READ, 0x1016, 1);
+        int w2 = find_sdo(0, node, QRTCAN_SDO_WRITE, 0x6007, 0);
+        int r2 = find_sdo(w2, node, QRTCAN_SDO_READ, 0x6007, 0);
+        int start = find_nmt(node);
+        CHECK(w1 >= 0 && sent_log[w1].s.size == 4 &&
+                  sent_log[w1].s.data == ((127u << 16) | 300u),
+              "drive %u: 0x1016:1 write %d (0x%08x)", node, w1,
+              w1 >= 0 ? (unsigned)sent_log[w1].s.data : 0u);
+        CHECK(w2 >= 0 && sent_log[w2].s.size == 2 && sent_log[w2].s.data == 3,
+              "drive %u: 0x6007 write %d", node, w2);
+        CHECK(r1 > w1 && r2 > w2, "drive %u: read-backs %d %d", node, r1, r2);
+        CHECK(start > r1 && start > r2,
+              "drive %u started (%d) before its "
+              "read-backs (%d, %d)",
+              node, start, r1, r2);
+        CHECK(drives[j].hb_consumer[0] == ((127u << 16) | 300u) &&
+                  drives[j].abort_option == 3,
+              "drive %u holds 0x%08x, %d", node,
+              (unsigned)drives[j].hb_consumer[0], drives[j].abort_option);
+        CHECK(drives[j].hb_watch[0] == DRIVE_HB_ARMED,
+              "drive %u does not watch our heartbeat", node);
         CHECK(drives[j].state == QRTCAN_402_OPERATION_ENABLED, "drive %d in %s",
               j + 1, qrtcan_402_state_name(drives[j].state));
         CHECK(drives[j].mode_display == QRTCAN_MODE_PROFILE_POSITION,
               "drive %d mode %d", j + 1, drives[j].mode_display);
         CHECK(drives[j].nmt == QRTCAN_NMT_OPERATIONAL, "drive %d NMT", j + 1);
     }
+    qrtcan_master_get_status(&m, &st);
+    CHECK(st.host_alive && st.heartbeat_produced, "host %d heartbeat %d",
+          st.host_alive, st.heartbeat_produced);
 
     /* a path: every moment on a segment, every waypoint reached */
     CHECK(follow(path1, path1, 3, 20.0), "path 1 not completed");
@@ -585,6 +770,206 @@ int main(void)
                "from the segments %.4f deg\n",
                peak_speed[0], peak_speed[1], peak_speed[2], worst_off_line);
     }
+    /* a drive that refuses its heartbeat consumer (it already watches node
+     * 127 in another entry: CiA 301's "general parameter
+     * incompatibility"), or reads back another value than it was told,
+     * is never enabled */
+    power_up(NULL);
+    drives[1].hb_consumer[1] = (127u << 16) | 500u;
+    refused("0x1016 refused by drive 2", 2, 0x1016);
+    power_up(NULL);
+    tamper.on = 1;
+    tamper.node = 3;
+    tamper.index = 0x6007;
+    tamper.subindex = 0;
+    tamper.value = 1; /* fault instead of quick stop */
+    refused("0x6007 read back as 1 by drive 3", 3, 0x6007);
+    power_up(NULL);
+    tamper.node = 1;
+    tamper.index = 0x1016;
+    tamper.subindex = 1;
+    tamper.value = (127u << 16) | 3000u;
+    refused("0x1016:1 read back as 3000 ms by drive 1", 1, 0x1016);
+    tamper.on = 0;
+
+    /* the host watchdog: with alive = 0 mid-move the master queues quick
+     * stops, produces no heartbeat (so the drives' consumers expire too),
+     * keeps the SYNC and the positions, refuses paths and takes the drives'
+     * heartbeat events for the stop they are; with alive = 1 the heartbeat
+     * comes back at once and the arm stays stopped until the next path */
+    {
+        static const double far_move[2][3] = {{0, 0, 0}, {90, 60, -60}};
+        double from[2][3];
+        unsigned long hb0, sync0, recoveries;
+        power_up(NULL);
+        CHECK(run_until(QRTCAN_MASTER_READY, 2.0), "host watchdog: bring-up");
+        CHECK(qrtcan_master_set_path(&m, far_move, 2, clock_us) == QRTCAN_OK,
+              "host watchdog: path");
+        for (i = 0; i < 4000; i++)
+            step();
+        CHECK(state() == QRTCAN_MASTER_MOVING, "host watchdog: %s",
+              qrtcan_master_state_name(state()));
+        {
+            /* the tick due for a heartbeat: it, a SYNC and the set-points
+             * queued when the host watchdog trips; the heartbeat is
+             * withdrawn with the set-points */
+            unsigned long before_stop = m.frames_withdrawn;
+            clock_us = m.last_heartbeat_us + m.cfg.master_heartbeat_us;
+            qrtcan_master_tick(&m, clock_us);
+            CHECK(queued(MASTER_HB_ID) == 1 && m.out_count >= 5,
+                  "%d heartbeats in %d frames queued", queued(MASTER_HB_ID),
+                  m.out_count);
+            qrtcan_master_set_host_alive(&m, 0, clock_us);
+            CHECK(queued(MASTER_HB_ID) == 0,
+                  "a heartbeat queued before the host watchdog tripped is "
+                  "still queued");
+            CHECK(deliver_after_stop("host watchdog", before_stop) >= 3,
+                  "the queued set-points were not withdrawn");
+        }
+        qrtcan_master_get_status(&m, &st);
+        CHECK(st.state == QRTCAN_MASTER_STOPPED &&
+                  st.reason == QRTCAN_REASON_HOST_WATCHDOG && !st.host_alive &&
+                  !st.heartbeat_produced,
+              "host not alive: %s, %s, alive %d, heartbeat %d",
+              qrtcan_master_state_name(st.state),
+              qrtcan_master_reason_name(st.reason), st.host_alive,
+              st.heartbeat_produced);
+        hb0 = hb_frames;
+        sync0 = sync_frames;
+        for (i = 0; i < 8000; i++)
+            step(); /* 2 s: 20 heartbeat periods */
+        CHECK(hb_frames == hb0, "%lu heartbeats while the host is not alive",
+              hb_frames - hb0);
+        CHECK(sync_frames - sync0 >= 190, "only %lu SYNC in 2 s",
+              sync_frames - sync0);
+        qrtcan_master_get_status(&m, &st);
+        for (j = 0; j < 3; j++) {
+            CHECK(drives[j].state == QRTCAN_402_QUICK_STOP_ACTIVE &&
+                      drives[j].vel == 0.0,
+                  "drive %d in %s", j + 1,
+                  qrtcan_402_state_name(drives[j].state));
+            CHECK(drives[j].hb_watch[0] == DRIVE_HB_EXPIRED &&
+                      m.drive[j].last_emcy == QRTCAN_EMCY_HEARTBEAT,
+                  "drive %d: its heartbeat consumer did not expire", j + 1);
+            CHECK(fabs(st.joints_deg[j] - drive_deg(j)) < 0.01,
+                  "joint %d reported %g, at %g", j, st.joints_deg[j],
+                  drive_deg(j));
+            from[0][j] = st.joints_deg[j];
+            from[1][j] = 0.0;
+        }
+        CHECK(st.state == QRTCAN_MASTER_STOPPED &&
+                  st.reason == QRTCAN_REASON_HOST_WATCHDOG,
+              "after the drives' heartbeat events: %s, %s",
+              qrtcan_master_state_name(st.state),
+              qrtcan_master_reason_name(st.reason));
+        CHECK(qrtcan_master_set_path(&m, (const double(*)[3])from, 2,
+                                     clock_us) == QRTCAN_E_CMD,
+              "a path while the host is not alive");
+        qrtcan_master_set_host_alive(&m, 0, clock_us);
+        CHECK(m.out_count == 0, "a repeated alive = 0 queued %d frames",
+              m.out_count);
+
+        hb0 = hb_frames;
+        qrtcan_master_set_host_alive(&m, 1, clock_us);
+        step();
+        CHECK(hb_frames == hb0 + 1, "heartbeat not resumed at once");
+        for (i = 0; i < 4000; i++)
+            step();
+        CHECK(hb_frames - hb0 == 11, "%lu heartbeats in the second after",
+              hb_frames - hb0);
+        qrtcan_master_get_status(&m, &st);
+        CHECK(st.state == QRTCAN_MASTER_STOPPED && st.host_alive &&
+                  st.heartbeat_produced,
+              "host alive again: %s, alive %d, heartbeat %d",
+              qrtcan_master_state_name(st.state), st.host_alive,
+              st.heartbeat_produced);
+        for (j = 0; j < 3; j++) {
+            CHECK(drives[j].state == QRTCAN_402_QUICK_STOP_ACTIVE &&
+                      drives[j].vel == 0.0,
+                  "drive %d moved before a path", j + 1);
+            CHECK(drives[j].hb_watch[0] == DRIVE_HB_ARMED,
+                  "drive %d: consumer not re-armed", j + 1);
+        }
+        CHECK(
+            follow((const double(*)[3])from, (const double(*)[3])from, 2, 20.0),
+            "no path after the host came back");
+
+        /* a fault while the host is not alive: no bring-up until it is */
+        qrtcan_master_set_host_alive(&m, 0, clock_us);
+        qrtcan_master_bus_error(&m, clock_us);
+        recoveries = m.recoveries;
+        n_sent = 0;
+        recording = 1;
+        for (i = 0; i < 12000; i++)
+            step(); /* 3 s: three retry periods */
+        recording = 0;
+        qrtcan_master_get_status(&m, &st);
+        CHECK(st.state == QRTCAN_MASTER_FAULT && st.recoveries == recoveries &&
+                  n_sent == 0,
+              "host not alive: %s, %lu retries, %d SDO/NMT frames",
+              qrtcan_master_state_name(st.state), st.recoveries - recoveries,
+              n_sent);
+        /* the retry waits its full time from alive = 1 on */
+        qrtcan_master_set_host_alive(&m, 1, clock_us);
+        for (i = 0; i < 3600; i++)
+            step();
+        CHECK(state() == QRTCAN_MASTER_FAULT && m.recoveries == recoveries,
+              "bring-up %.1f s after the host came back",
+              (double)STEP_US * i * 1e-6);
+        CHECK(run_until(QRTCAN_MASTER_READY, 3.0),
+              "no bring-up once the host is alive again");
+        CHECK(m.recoveries == recoveries + 1, "%lu retries",
+              m.recoveries - recoveries);
+    }
+
+    /* the master dies mid-move (its process killed: nothing calls it any
+     * more). Drives set up as real ones, with no SYNC watchdog, stop by
+     * their heartbeat consumers alone, within the consumer time and a
+     * tick of the master's last heartbeat, though they keep hearing each
+     * other's */
+    {
+        static const double kill_move[2][3] = {{0, 0, 0}, {120, 90, -90}};
+        uint64_t qs_us[3] = {0, 0, 0};
+        long drive_heartbeats = 0;
+        power_up(NULL);
+        CHECK(run_until(QRTCAN_MASTER_READY, 2.0), "kill: bring-up");
+        for (j = 0; j < 3; j++)
+            drives[j].watchdog_ms = 0;
+        CHECK(qrtcan_master_set_path(&m, kill_move, 2, clock_us) == QRTCAN_OK,
+              "kill: path");
+        for (i = 0; i < 6000; i++)
+            step();
+        for (j = 0; j < 3; j++)
+            CHECK(drives[j].state == QRTCAN_402_OPERATION_ENABLED &&
+                      drives[j].moving && drives[j].vel != 0.0,
+                  "kill: drive %d not moving", j + 1);
+        for (i = 0; i < 4000; i++) {
+            drive_heartbeats += step_drives_only();
+            for (j = 0; j < 3; j++)
+                if (qs_us[j] == 0 &&
+                    drives[j].state == QRTCAN_402_QUICK_STOP_ACTIVE)
+                    qs_us[j] = clock_us;
+        }
+        CHECK(drive_heartbeats >= 3 * 10, "the drives heard %ld heartbeats",
+              drive_heartbeats);
+        for (j = 0; j < 3; j++) {
+            CHECK(qs_us[j] > last_hb_us + 300000u &&
+                      qs_us[j] <= last_hb_us + 301000u,
+                  "drive %d: quick stop %.2f ms after the master's last "
+                  "heartbeat",
+                  j + 1, (double)(qs_us[j] - last_hb_us) / 1000.0);
+            CHECK(drives[j].vel == 0.0 &&
+                      drives[j].state == QRTCAN_402_QUICK_STOP_ACTIVE,
+                  "drive %d in %s", j + 1,
+                  qrtcan_402_state_name(drives[j].state));
+            printf("master killed mid-move: drive %d in Quick Stop Active "
+                   "%.2f ms after the master's last heartbeat, %.3f deg "
+                   "travelled after it\n",
+                   j + 1, (double)(qs_us[j] - last_hb_us) / 1000.0,
+                   fabs(drive_deg(j) - hb_deg[j]));
+        }
+    }
+
     CHECK(frames_lost == 0, "bus overflow in the test itself");
     return test_done("test_master");
 }

@@ -6,8 +6,9 @@
  * silently: it counts what it drops). The master also runs three drives in
  * a closed loop (its frames to them, theirs to it, the input's frames
  * injected into both), so that it gets past bring-up into moving and
- * stopping; after every stop it is asked for, no set-point may follow the
- * quick stop. */
+ * stopping; after every stop it is asked for (the host watchdog's
+ * included), no set-point may follow the quick stop, and while the host is
+ * not alive no heartbeat of the master's may go out. */
 #include <stddef.h>
 #include <stdint.h>
 #include <string.h>
@@ -139,7 +140,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         cfg.limit_max = 400000;
         cfg.servo_error = 3;
         cfg.watchdog_ms = 200;
-        cfg.master_node = 127;
         drive_init(&loop[j], &cfg, &loop_can);
     }
     memset(&cfg, 0, sizeof cfg);
@@ -187,12 +187,19 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             } else if (f.data[6] & 4) {
                 qrtcan_master_bus_error(&m, clock_us);
                 stopped = live;
+            } else if (f.data[6] & 8) {
+                int alive = !m.host_alive;
+                qrtcan_master_set_host_alive(&m, alive, clock_us);
+                stopped = live && !alive;
             }
         }
         n = qrtcan_master_take_frames(&m, out, QRTCAN_MASTER_OUTBOX);
         qrtcan_master_get_status(&m, &st);
         if (stopped)
             check_stop_is_last(out, n);
+        for (k = 0; k < n && !st.host_alive; k++)
+            if (out[k].id == QRTCAN_FN_HEARTBEAT + mc.master_node)
+                __builtin_trap();
         for (k = 0; k < n; k++)
             for (j = 0; j < 3; j++)
                 drive_on_frame(&loop[j], &out[k], &loop_can);
