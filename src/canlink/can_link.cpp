@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
@@ -321,7 +322,7 @@ void CanLink::run()
         } else {
             usleep(1000);
         }
-        std::lock_guard<std::mutex> lock(mu_);
+        std::unique_lock<std::mutex> lock(mu_);
         uint64_t now = now_us();
         if (fd_ < 0 && now >= next_open_us_)
             open_socket(now);
@@ -356,9 +357,47 @@ void CanLink::run()
                 link_ = "up"; // frames flow again
             qrtcan_master_on_frame(&master_, &q, now);
         }
+        std::string news = check_host(now);
         qrtcan_master_tick(&master_, now);
         flush(now);
+        if (!news.empty()) {
+            // after the stop is on the bus, and not holding the lock: a
+            // slow stderr must not hold up the frames
+            lock.unlock();
+            std::fputs(news.c_str(), stderr);
+            lock.lock();
+        }
     }
+}
+
+void CanLink::set_host_check(HostCheck check)
+{
+    // removing the check leaves the master as it is: after a trip the arm
+    // stays stopped and the heartbeat off (a shutdown follows)
+    std::lock_guard<std::mutex> lock(mu_);
+    host_check_ = std::move(check);
+}
+
+std::string CanLink::check_host(uint64_t now)
+{
+    if (!host_check_)
+        return "";
+    std::string why;
+    bool alive = host_check_(now, &why);
+    if (alive == host_alive_)
+        return "";
+    host_alive_ = alive;
+    if (!alive) {
+        host_watchdog_trips_++;
+        discard_pending(pending_.size()); // set-points must not follow
+    }
+    qrtcan_master_set_host_alive(&master_, alive ? 1 : 0, now);
+    if (!alive)
+        return "qrtpland: error: host watchdog: " + why +
+               ": quick stop, CAN heartbeat stopped\n";
+    return "qrtpland: warn: host watchdog: the guarding threads are back; "
+           "CAN heartbeat resumed, the arm stays stopped until the next "
+           "path\n";
 }
 
 int CanLink::set_path(const std::vector<std::array<double, 3>> &waypoints)
@@ -396,6 +435,11 @@ CanLinkStatus CanLink::status() const
     s.frames_written = frames_written_;
     s.frames_unsent = frames_unsent_;
     s.last_quick_stop_us = last_quick_stop_us_;
+    for (int i = 0; i < master_.n_waypoints; i++)
+        s.path.push_back({master_.path_deg[i][0], master_.path_deg[i][1],
+                          master_.path_deg[i][2]});
+    s.host_alive = host_alive_;
+    s.host_watchdog_trips = host_watchdog_trips_;
     return s;
 }
 

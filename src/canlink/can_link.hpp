@@ -13,6 +13,7 @@
 #include <array>
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -35,6 +36,11 @@ struct CanLinkStatus {
     // error, or beyond the queue's room while the bus refused them
     unsigned long frames_unsent = 0;
     uint64_t last_quick_stop_us = 0; // CLOCK_MONOTONIC when written
+    // the path the master is executing, waypoints in degrees: empty when
+    // it has none (at rest, stopped, ramping down, faulted)
+    std::vector<std::array<double, 3>> path;
+    bool host_alive = true;                // the host check's last answer
+    unsigned long host_watchdog_trips = 0; // times it answered no
 };
 
 // "A,B,C": the drive node ids of alpha, sigma and eta, as the daemon's
@@ -99,6 +105,14 @@ class CanLink
 
     CanLinkStatus status() const;
 
+    // Asked on the link's thread every cycle (about 1 ms) with now_us():
+    // whether the host's threads that guard motion are alive, and if not,
+    // why. While it answers no, the master holds the arm stopped and sends
+    // no heartbeat (qrtcan_master_set_host_alive), so the drives' heartbeat
+    // consumers stop them even if this process then hangs. nullptr: none.
+    using HostCheck = std::function<bool(uint64_t now_us, std::string *why)>;
+    void set_host_check(HostCheck check);
+
     static uint64_t now_us();
 
   private:
@@ -108,6 +122,8 @@ class CanLink
     void flush(uint64_t now); // call with mu_ held
     void bus_error(uint64_t now, const std::string &why);
     void discard_pending(size_t n); // the oldest n, counted
+    // call with mu_ held; what to log (after the lock), "" if nothing new
+    std::string check_host(uint64_t now);
 
     std::string iface_;
     qrtcan_master_config cfg_;
@@ -119,6 +135,9 @@ class CanLink
     unsigned long bus_errors_ = 0, write_retries_ = 0;
     unsigned long frames_written_ = 0, frames_unsent_ = 0;
     uint64_t last_quick_stop_us_ = 0;
+    HostCheck host_check_;
+    bool host_alive_ = true;
+    unsigned long host_watchdog_trips_ = 0;
     uint64_t nobuf_since_ = 0;          // first ENOBUFS of the present run
     std::vector<qrtcan_frame> pending_; // taken from the master, not written
     std::atomic<bool> stop_{false};

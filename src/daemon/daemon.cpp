@@ -1,5 +1,6 @@
 #include "daemon.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -8,6 +9,7 @@
 #include <thread>
 
 #include "decode.hpp"
+#include "lcm_loss.hpp"
 #include "log.hpp"
 #include "qrtplan/daemon_status_t.hpp"
 #include "qrtplan/joint_state_t.hpp"
@@ -65,7 +67,8 @@ static qrt_planner *new_planner()
 
 Daemon::Daemon(const Options &opts)
     : opts_(opts), lcm_(opts.lcm_url), planner_(new_planner()),
-      picture_(opts.window_s), guard_picture_(opts.window_s)
+      picture_(opts.window_s, opts.max_points),
+      guard_picture_(opts.window_s, opts.max_points)
 {
 }
 
@@ -74,14 +77,37 @@ Daemon::~Daemon() = default;
 void Daemon::reject(const std::string &why)
 {
     last_error_ = why; // caller holds mu_
-    log(LogLevel::warn, "%s", why.c_str());
+    log_limited(LogLevel::warn, "%s", why.c_str());
 }
 
 // --- the LCM thread --------------------------------------------------------
 
+// Caller holds mu_. With --require-sensor or --sensor only those ids are
+// taken; without, the first kMaxSensors ids seen.
+bool Daemon::sensor_taken(const std::string &id, std::string *why)
+{
+    const auto &req = opts_.required_sensors, &other = opts_.other_sensors;
+    if (!req.empty() || !other.empty()) {
+        if (std::find(req.begin(), req.end(), id) != req.end() ||
+            std::find(other.begin(), other.end(), id) != other.end())
+            return true;
+        *why = "sensor '" + id + "' is not one of --require-sensor/--sensor";
+        return false;
+    }
+    if (sensors_seen_.count(id) != 0)
+        return true;
+    if (sensors_seen_.size() >= kMaxSensors) {
+        *why = "sensor '" + id + "' beyond the " + std::to_string(kMaxSensors) +
+               " sensors already seen";
+        return false;
+    }
+    sensors_seen_.insert(id);
+    return true;
+}
+
 void Daemon::on_scan(const lcm::ReceiveBuffer *rbuf, const std::string &channel)
 {
-    int64_t t = now_us();
+    int64_t t = now_us(), wall = wall_us();
     std::string why;
     auto msg = std::make_shared<qrtplan::range_scan_t>();
     PendingScan p;
@@ -107,14 +133,29 @@ void Daemon::on_scan(const lcm::ReceiveBuffer *rbuf, const std::string &channel)
         return;
     }
     const std::string &id = msg->sensor_id;
-    if (sensors_seen_.count(id) == 0) {
-        if (sensors_seen_.size() >= kMaxSensors) {
-            scans_rejected_++;
-            reject(channel + ": scan refused: sensor '" + id + "' beyond the " +
-                   std::to_string(kMaxSensors) + " sensors already seen");
-            return;
-        }
-        sensors_seen_.insert(id);
+    if (!sensor_taken(id, &why)) {
+        scans_unknown_sensor_++;
+        reject(channel + ": scan refused: " + why);
+        return;
+    }
+    // the stamp against this computer's clock (docs: both keep
+    // CLOCK_REALTIME within the skew): a scan from the future would outlive
+    // every fresh one, a scan older than the maximum age is no evidence
+    const int64_t skew = int64_t(opts_.max_clock_skew_s * 1e6);
+    const int64_t max_age = int64_t(opts_.max_scan_age_s * 1e6);
+    if (msg->utime > wall + skew) {
+        scans_future_++;
+        reject(channel + ": scan from '" + id + "' refused: stamped " +
+               std::to_string((msg->utime - wall) / 1000) +
+               " ms ahead of this computer's clock");
+        return;
+    }
+    if (wall - msg->utime > max_age) {
+        scans_stale_++;
+        reject(channel + ": scan from '" + id +
+               "' refused: " + std::to_string((wall - msg->utime) / 1000) +
+               " ms old, over --max-scan-age");
+        return;
     }
     scans_received_++;
     if (guard_planner_) { // latest wins here too (not counted twice)
@@ -243,15 +284,19 @@ void Daemon::publish_plan(const qrt_plan *plan, const char *status,
     points_dropped_ = out.points_dropped;
 }
 
-// Scans into a picture (the planner's, which reports refusals and invalid
-// returns, or the guard's, which leaves that to the planner).
+// Scans into a picture (the planner's, which reports refusals, invalid
+// returns and the budget, or the guard's, which leaves that to the
+// planner).
 void Daemon::ingest(std::map<std::string, PendingScan> &scans, Picture *picture,
                     bool report, long *invalid)
 {
+    const qrt_arm &arm = opts_.params.arm;
+    const double reach =
+        arm_reach_m(arm.link_m, arm.link_radius_m, opts_.params.margin_m);
     for (auto &kv : scans) {
         ScanPoints sp;
         std::string why =
-            scan_to_points(*kv.second.msg, opts_.max_returns, &sp);
+            scan_to_points(*kv.second.msg, opts_.max_returns, reach, &sp);
         if (!why.empty()) {
             if (report) {
                 std::lock_guard<std::mutex> lock(mu_);
@@ -261,74 +306,93 @@ void Daemon::ingest(std::map<std::string, PendingScan> &scans, Picture *picture,
             continue;
         }
         *invalid += sp.invalid;
+        long far = sp.out_of_reach, n = long(sp.xyz.size() / 3);
         if (sp.invalid > 0 && report)
             log(LogLevel::debug, "scan from '%s': %ld returns NaN/Inf or <= 0",
                 kv.first.c_str(), sp.invalid);
-        picture->add(std::move(sp));
-    }
-}
-
-// The planner thread's path being executed, shared with the guard.
-void Daemon::set_executing(const Path &path)
-{
-    executing_ = path;
-    std::lock_guard<std::mutex> lock(mu_);
-    guard_path_ = path;
-    guard_path_id_++;
-}
-
-// The path being executed (the rest of it, when the drives report where
-// they are): still free among the points now in the planner? Asked after
-// the plan, on the rows it built (the guard thread, with CAN, asks first on
-// its own); a blocked path is dropped and, unless the guard already did,
-// the arm stopped.
-bool Daemon::executing_blocked(const std::array<double, 3> &here,
-                               bool know_here, const CanLinkStatus &cs)
-{
-    if (executing_.empty())
-        return false;
-    Path rest;
-    if (can_ && cs.master.state == QRTCAN_MASTER_MOVING && know_here) {
-        rest.push_back(here);
-        for (size_t i = size_t(std::max(cs.master.waypoint, 1));
-             i < executing_.size(); i++)
-            rest.push_back(executing_[i]);
-    } else if (!can_) {
-        rest = executing_;
-    }
-    bool guard_stopped;
-    {
+        bool fits = picture->add(std::move(sp), wall_us());
+        if (!report)
+            continue;
         std::lock_guard<std::mutex> lock(mu_);
-        guard_stopped = guard_stopped_id_ == guard_path_id_;
+        returns_out_of_reach_ += far;
+        if (!fits) {
+            scans_over_budget_++;
+            reject("scan from '" + kv.first + "' refused: its " +
+                   std::to_string(n) +
+                   " points in reach do not fit the obstacle picture's "
+                   "--max-points " +
+                   std::to_string(opts_.max_points) +
+                   " beside the other sensors' newest scans");
+        }
     }
-    if (guard_stopped) { // the guard saw it first and stopped the arm
-        set_executing(Path());
-        return true;
-    }
+}
+
+Evidence Daemon::evidence(const Picture &picture) const
+{
+    return picture.evidence(wall_us(), opts_.required_sensors,
+                            int64_t(opts_.max_scan_age_s * 1e6));
+}
+
+// The rest of the path the master is executing: from where the drives are
+// to the waypoint being approached, then the waypoints after it. Empty
+// when the master has no path (at rest, stopped, or ramping down).
+Daemon::Path Daemon::rest_of_path(const CanLinkStatus &cs) const
+{
+    Path rest;
+    if (cs.path.size() < 2 || !cs.master.all_positions_known)
+        return rest;
+    rest.push_back({cs.master.joints_deg[0], cs.master.joints_deg[1],
+                    cs.master.joints_deg[2]});
+    for (size_t i = size_t(std::max(cs.master.waypoint, 1)); i < cs.path.size();
+         i++)
+        rest.push_back(cs.path[i]);
+    return rest;
+}
+
+// The path being executed still free among the points now in the planner?
+// With CAN that is the master's path (rest_of_path), else the last ok
+// plan. Asked after the plan, on the rows it built (the guard thread, with
+// CAN, asks first on its own); a blocked path is dropped and the arm
+// stopped.
+bool Daemon::executing_blocked(const CanLinkStatus &cs)
+{
+    Path rest = can_ ? rest_of_path(cs) : executing_;
+    if (rest.size() < 2)
+        return false;
     int first = -1;
     const double(*wp)[3] = reinterpret_cast<const double(*)[3]>(rest.data());
     // a whole mask is built: ask it; else build the path's rows (most of
     // them the plan has just built)
-    int rc = rest.size() < 2 ? QRT_E_INVALID
-             : opts_.mask_as_read
+    int rc = opts_.mask_as_read
                  ? qrt_planner_check_path_now(planner_.get(), wp,
                                               int(rest.size()), &first)
                  : qrt_planner_check_path(planner_.get(), wp, int(rest.size()),
                                           &first);
     if (rc != QRT_OK || first < 0)
         return false;
-    bool guard_was_first;
-    { // the guard may have found it at the same time: one stop
-        std::lock_guard<std::mutex> lock(mu_);
-        guard_was_first = guard_stopped_id_ == guard_path_id_;
-        guard_stopped_id_ = guard_path_id_;
+    if (can_) {
+        // the guard may have stopped it already: a second stop is harmless
+        can_->quick_stop();
+        log(LogLevel::warn,
+            "the path being executed is blocked (segment %d): quick stop sent",
+            first);
+    } else {
+        log(LogLevel::warn, "the path being executed is blocked (segment %d)",
+            first);
+        executing_.clear();
     }
-    if (can_ && !guard_was_first)
-        can_->quick_stop(); // before anything else
-    if (!guard_was_first)
-        log(LogLevel::warn, "the path being executed is blocked (segment %d)%s",
-            first, can_ ? ": quick stop sent" : "");
-    set_executing(Path());
+    return true;
+}
+
+bool Daemon::same_goal(const qrtplan::plan_request_t &a,
+                       const qrtplan::plan_request_t &b) const
+{
+    if (a.goal_kind != b.goal_kind || a.has_start != b.has_start)
+        return false;
+    for (int j = 0; j < 3; j++)
+        if (a.goal[j] != b.goal[j] ||
+            (a.has_start && a.start_deg[j] != b.start_deg[j]))
+            return false;
     return true;
 }
 
@@ -346,6 +410,7 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
         std::lock_guard<std::mutex> lock(mu_);
         picture_points_ = long(gather_.size() / 3);
     }
+    planner_beat_us_ = CanLink::now_us();
     if (!have_goal_)
         return; // the picture is kept up to date; nothing to plan for
     qrt_planner_clear_points(pl);
@@ -356,10 +421,29 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
     CanLinkStatus cs;
     if (can_)
         cs = can_->status();
+    Evidence ev = evidence(picture_);
+    if (!ev.fresh()) {
+        // no plan on missing or stale evidence; a path being executed on
+        // it is stopped (the guard does so too, on its timer)
+        if (can_ && !cs.path.empty()) {
+            can_->quick_stop();
+            {
+                std::lock_guard<std::mutex> lock(mu_);
+                evidence_stops_++;
+            }
+            log(LogLevel::warn, "%s: quick stop sent", ev.detail.c_str());
+        }
+        executing_.clear();
+        last_plan_ok_ = false;
+        publish_plan(nullptr, ev.status.c_str(), ev.detail, false, t1 - t0, 0,
+                     0, 0, trigger_us);
+        return;
+    }
     int64_t t_mask = now_us();
     if (!opts_.mask_as_read)
         build_mask();
     int64_t t2 = now_us();
+    planner_beat_us_ = CanLink::now_us();
 
     qrt_target start{}, goal{};
     goal.kind = goal_.goal_kind == qrtplan::plan_request_t::GOAL_XYZ
@@ -376,7 +460,8 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
             start.value[j] = here[size_t(j)];
     } else {
         int64_t tc = now_us();
-        bool blocked = executing_blocked(here, know_here, cs);
+        bool blocked = executing_blocked(cs);
+        last_plan_ok_ = false;
         publish_plan(nullptr, "invalid_request",
                      "no start: the request has none and no joint state has "
                      "been received on " +
@@ -389,12 +474,23 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
     int rc = opts_.mask_as_read ? qrt_planner_plan_now(pl, &start, &goal, &plan)
                                 : qrt_planner_plan(pl, &start, &goal, &plan);
     int64_t t3 = now_us();
+    planner_beat_us_ = CanLink::now_us();
     // as read, mask and search are one stage: all of it counts as the mask
     int64_t mask_us = opts_.mask_as_read ? t3 - t2 : t2 - t_mask;
     int64_t search_us = opts_.mask_as_read ? 0 : t3 - t2;
     // the path being executed, on the rows the plan has just built (and
     // the few more it passes through)
-    bool blocked = executing_blocked(here, know_here, cs);
+    if (can_)
+        cs = can_->status();
+    bool blocked = executing_blocked(cs);
+    {
+        // the guard saw it first (the planner waits for it with each scan)
+        // and stopped the arm: the master has no path left to check, but
+        // this plan is the one to say that the path was blocked
+        std::lock_guard<std::mutex> lock(mu_);
+        blocked = blocked || guard_stop_unreported_;
+        guard_stop_unreported_ = false;
+    }
     int64_t check_us = now_us() - t3;
     if (rc != QRT_OK) {
         std::string why = std::string("the request is invalid: ") +
@@ -405,10 +501,12 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
             std::lock_guard<std::mutex> lock(mu_);
             reject(why);
         }
+        last_plan_ok_ = false;
         publish_plan(nullptr, "invalid_request", why, blocked, t1 - t0,
                      check_us, mask_us, search_us, trigger_us);
         return;
     }
+    last_plan_ok_ = plan.status == QRT_STATUS_OK;
     publish_plan(&plan, qrt_plan_status_name(plan.status),
                  plan.detail ? plan.detail : "", blocked, t1 - t0, check_us,
                  mask_us, search_us, trigger_us);
@@ -419,7 +517,7 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
         path.push_back({plan.waypoints_deg[i][0], plan.waypoints_deg[i][1],
                         plan.waypoints_deg[i][2]});
     if (!can_) {
-        set_executing(path);
+        executing_ = path;
         return;
     }
     // the drives take a new path only at rest; a free path being executed
@@ -429,32 +527,54 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
                    cs.master.state == QRTCAN_MASTER_STOPPED;
     if (at_rest && path.size() >= 2 &&
         joint_gap(path.front().data(), path.back().data()) > 0.01) {
+        // the evidence once more, as late as can be: the plan took time
+        Evidence late = evidence(picture_);
+        if (!late.fresh()) {
+            log(LogLevel::warn, "path not handed to the drives: %s",
+                late.detail.c_str());
+            return;
+        }
         int r = can_->set_path(path);
-        if (r == QRTCAN_OK) {
-            set_executing(path);
+        if (r == QRTCAN_OK)
             log(LogLevel::info, "executing a path of %zu waypoints",
                 path.size());
-        } else {
+        else if (r == QRTCAN_E_CMD) // not at rest yet: the next plan will do
             log(LogLevel::debug, "drives did not take the path yet: %s",
                 qrtcan_strerror(r));
-        }
+        else // a plan the drives cannot execute must not look like motion
+            log_limited(LogLevel::warn,
+                        "the master refused the path (%s): the arm does not "
+                        "move",
+                        qrtcan_strerror(r));
     }
 }
 
 // Longest a replan waits for the guard thread to check the same scan.
 constexpr int GUARD_YIELD_MS = 40;
+// How often the planner thread wakes without a scan (the resume and the
+// evidence's timer) and the guard thread likewise (the evidence's timer).
+constexpr int PLANNER_TICK_MS = 50;
+constexpr int GUARD_TICK_MS = 10;
 
-void Daemon::planner_loop(const std::atomic<bool> &stop)
+void Daemon::planner_loop(const RunFlags &flags)
 {
+    const std::atomic<bool> &stop = flags.stop;
     while (!stop) {
+        planner_beat_us_ = CanLink::now_us();
+        while (flags.freeze_planner && !stop) // --test-hooks: a stalled thread
+            std::this_thread::sleep_for(std::chrono::milliseconds(10));
         std::map<std::string, PendingScan> scans;
         bool new_request = false;
         int64_t trigger = 0;
+        qrtplan::plan_request_t previous_goal = goal_;
+        bool had_goal = have_goal_;
         {
             std::unique_lock<std::mutex> lock(mu_);
-            wake_.wait_for(lock, std::chrono::milliseconds(50), [&] {
-                return stop || !pending_scans_.empty() || have_pending_request_;
-            });
+            wake_.wait_for(lock, std::chrono::milliseconds(PLANNER_TICK_MS),
+                           [&] {
+                               return stop || !pending_scans_.empty() ||
+                                      have_pending_request_;
+                           });
             scans.swap(pending_scans_);
             // a scan that may stop the arm goes to the guard first: the
             // replan starts when the guard is done with it (or after
@@ -471,6 +591,7 @@ void Daemon::planner_loop(const std::atomic<bool> &stop)
                 trigger = request_received_us_;
             }
         }
+        planner_beat_us_ = CanLink::now_us();
         for (auto &kv : scans)
             trigger = std::max(trigger, kv.second.received_us);
         if (new_request) {
@@ -479,9 +600,24 @@ void Daemon::planner_loop(const std::atomic<bool> &stop)
                 finite =
                     finite && std::isfinite(goal_.goal[j]) &&
                     (!goal_.has_start || std::isfinite(goal_.start_deg[j]));
-            if (!finite ||
-                (goal_.goal_kind != qrtplan::plan_request_t::GOAL_XYZ &&
-                 goal_.goal_kind != qrtplan::plan_request_t::GOAL_JOINTS)) {
+            bool valid =
+                finite &&
+                (goal_.goal_kind == qrtplan::plan_request_t::GOAL_XYZ ||
+                 goal_.goal_kind == qrtplan::plan_request_t::GOAL_JOINTS);
+            // a new goal while the drives execute a path: stop, and the new
+            // path starts from rest (the master takes paths only at rest,
+            // and the old path leads where the operator no longer wants
+            // the arm); a request repeating the goal changes nothing
+            if (can_ &&
+                (!valid || !had_goal || !same_goal(goal_, previous_goal)) &&
+                !can_->status().path.empty()) {
+                can_->quick_stop();
+                log(LogLevel::info,
+                    "new goal (request %lld) while moving: "
+                    "quick stop, the new path starts from rest",
+                    static_cast<long long>(goal_.request_id));
+            }
+            if (!valid) {
                 {
                     std::lock_guard<std::mutex> lock(mu_);
                     requests_rejected_++;
@@ -492,10 +628,22 @@ void Daemon::planner_loop(const std::atomic<bool> &stop)
                              "NaN/Inf values or an unknown goal kind", false, 0,
                              0, 0, 0, trigger);
                 have_goal_ = false;
+                last_plan_ok_ = false;
                 continue;
             }
             have_goal_ = true;
-            set_executing(Path());
+        }
+        // the evidence went stale since the last ok plan: say so once (an
+        // outside executor must stop; with CAN the guard stops the arm)
+        if (have_goal_ && last_plan_ok_ && scans.empty() && !new_request) {
+            Evidence ev = evidence(picture_);
+            if (!ev.fresh()) {
+                last_plan_ok_ = false;
+                executing_.clear();
+                publish_plan(nullptr, ev.status.c_str(), ev.detail, false, 0, 0,
+                             0, 0, now_us());
+                continue;
+            }
         }
         // with the drives idle short of the goal, plan again without a scan
         bool resume = false;
@@ -505,8 +653,8 @@ void Daemon::planner_loop(const std::atomic<bool> &stop)
             if (cs.master.state == QRTCAN_MASTER_READY &&
                 current_joints(&here) &&
                 goal_.goal_kind == qrtplan::plan_request_t::GOAL_JOINTS &&
-                joint_gap(here.data(), goal_.goal) > 0.5 &&
-                (executing_.empty() || cs.master.path_done)) {
+                joint_gap(here.data(), goal_.goal) > 0.5 && cs.path.empty() &&
+                evidence(picture_).fresh()) {
                 resume = true;
                 trigger = now_us();
             }
@@ -519,29 +667,31 @@ void Daemon::planner_loop(const std::atomic<bool> &stop)
 
 // --- the guard thread (with CAN) -------------------------------------------
 
-// The path being executed against the newest scans, with only its own rows
-// of the mask (qrt_planner_check_path_now): a quick stop the moment a scan
-// blocks it, whatever the planner thread is doing.
-void Daemon::guard_check(std::map<std::string, PendingScan> &scans,
-                         const Path &path, uint64_t path_id)
+// The evidence on the guard's timer: the master executing a path while a
+// required sensor has gone quiet (or every sensor, with none required) is
+// stopped within GUARD_TICK_MS of the scan's age passing the maximum.
+void Daemon::guard_evidence(const CanLinkStatus &cs)
 {
-    int64_t received = 0, t0 = now_us();
-    for (auto &kv : scans)
-        received = std::max(received, kv.second.received_us);
-    long invalid = 0;
-    ingest(scans, &guard_picture_, false, &invalid);
-    if (path.size() < 2)
+    if (cs.path.empty())
         return;
-    CanLinkStatus cs = can_->status();
-    if (cs.master.state != QRTCAN_MASTER_MOVING ||
-        !cs.master.all_positions_known)
+    Evidence ev = evidence(guard_picture_);
+    if (ev.fresh())
         return;
-    Path rest;
-    rest.push_back({cs.master.joints_deg[0], cs.master.joints_deg[1],
-                    cs.master.joints_deg[2]});
-    for (size_t i = size_t(std::max(cs.master.waypoint, 1)); i < path.size();
-         i++)
-        rest.push_back(path[i]);
+    can_->quick_stop();
+    {
+        std::lock_guard<std::mutex> lock(mu_);
+        evidence_stops_++;
+    }
+    log(LogLevel::warn, "%s: quick stop sent", ev.detail.c_str());
+}
+
+// The path the master is executing against the guard's picture, with only
+// its own rows of the mask (qrt_planner_check_path_now): a quick stop the
+// moment a scan blocks it, whatever the planner thread is doing.
+void Daemon::guard_check(const CanLinkStatus &cs, int64_t received)
+{
+    int64_t t1 = now_us();
+    Path rest = rest_of_path(cs);
     if (rest.size() < 2)
         return;
     qrt_planner *pl = guard_planner_.get();
@@ -550,30 +700,28 @@ void Daemon::guard_check(std::map<std::string, PendingScan> &scans,
     qrt_planner_add_points(pl, guard_gather_.data(),
                            long(guard_gather_.size() / 3));
     int first = -1;
-    int64_t t1 = now_us();
     if (qrt_planner_check_path_now(
             pl, reinterpret_cast<const double(*)[3]>(rest.data()),
             int(rest.size()), &first) != QRT_OK ||
         first < 0)
         return;
     int64_t t2 = now_us();
+    can_->quick_stop();
     {
         std::lock_guard<std::mutex> lock(mu_);
-        if (guard_path_id_ != path_id)
-            return; // the planner has moved on to another path meanwhile
-        guard_stopped_id_ = path_id;
+        guard_stop_unreported_ = true;
     }
-    can_->quick_stop();
     log(LogLevel::warn,
         "the path being executed is blocked (segment %d): quick stop sent "
-        "%.1f ms after the scan arrived (waiting %.1f, ingest %.1f, check "
+        "%.1f ms after the scan arrived (waiting and ingest %.1f, check "
         "%.1f ms)",
-        first, 1e-3 * double(now_us() - received), 1e-3 * double(t0 - received),
-        1e-3 * double(t1 - t0), 1e-3 * double(t2 - t1));
+        first, 1e-3 * double(now_us() - received), 1e-3 * double(t1 - received),
+        1e-3 * double(t2 - t1));
 }
 
-void Daemon::guard_loop(const std::atomic<bool> &stop)
+void Daemon::guard_loop(const RunFlags &flags)
 {
+    const std::atomic<bool> &stop = flags.stop;
     // ahead of the planner's mask threads where the system allows it (root
     // or CAP_SYS_NICE): the lowest real-time priority, and the guard sleeps
     // between scans, so it cannot starve anything else
@@ -585,26 +733,52 @@ void Daemon::guard_loop(const std::atomic<bool> &stop)
                 : "normal priority (no permission for "
                   "SCHED_FIFO)");
     while (!stop) {
+        guard_beat_us_ = CanLink::now_us();
+        while (flags.freeze_guard && !stop) // --test-hooks: a stalled thread
+            std::this_thread::sleep_for(std::chrono::milliseconds(10));
         std::map<std::string, PendingScan> scans;
-        Path path;
-        uint64_t id;
         {
             std::unique_lock<std::mutex> lock(mu_);
-            guard_wake_.wait_for(lock, std::chrono::milliseconds(50),
+            guard_wake_.wait_for(lock, std::chrono::milliseconds(GUARD_TICK_MS),
                                  [&] { return stop || !guard_scans_.empty(); });
             scans.swap(guard_scans_);
-            if (guard_stopped_id_ != guard_path_id_)
-                path = guard_path_;
-            id = guard_path_id_;
             guard_busy_ = !scans.empty();
         }
+        int64_t received = 0;
+        for (auto &kv : scans)
+            received = std::max(received, kv.second.received_us);
+        long invalid = 0;
+        ingest(scans, &guard_picture_, false, &invalid);
+        guard_beat_us_ = CanLink::now_us(); // a large scan is progress too
+        CanLinkStatus cs = can_->status();
+        guard_evidence(cs);
         if (!scans.empty()) {
-            guard_check(scans, path, id);
+            guard_check(can_->status(), received);
             std::lock_guard<std::mutex> lock(mu_);
             guard_busy_ = false;
             guard_idle_.notify_all();
         }
     }
+}
+
+// The CAN link thread's question, every millisecond: are the threads that
+// guard motion going round their loops? No: the master stops the arm and
+// its own heartbeat, so the drives stop even if this process hangs.
+bool Daemon::host_alive(uint64_t now, std::string *why) const
+{
+    uint64_t guard = guard_beat_us_, planner = planner_beat_us_;
+    if (now > guard && now - guard > uint64_t(opts_.guard_deadline_s * 1e6)) {
+        *why = "the guard thread has been silent for " +
+               std::to_string((now - guard) / 1000) + " ms";
+        return false;
+    }
+    if (now > planner &&
+        now - planner > uint64_t(opts_.planner_deadline_s * 1e6)) {
+        *why = "the planner thread has been silent for " +
+               std::to_string((now - planner) / 1000) + " ms";
+        return false;
+    }
+    return true;
 }
 
 // --- the clock thread ------------------------------------------------------
@@ -646,6 +820,7 @@ void Daemon::clock_loop(const std::atomic<bool> &stop)
                 s.can_frames_unsent = int64_t(cs.frames_unsent);
                 s.can_frames_withdrawn = int64_t(cs.master.frames_withdrawn);
                 s.can_bus_errors = int64_t(cs.bus_errors);
+                s.watchdog_trips = int64_t(cs.host_watchdog_trips);
             }
             {
                 std::lock_guard<std::mutex> lock(mu_);
@@ -660,7 +835,15 @@ void Daemon::clock_loop(const std::atomic<bool> &stop)
                 s.points_in_picture = int32_t(picture_points_);
                 s.points_dropped = int32_t(points_dropped_);
                 s.last_error = last_error_;
+                s.scans_future = scans_future_;
+                s.scans_stale = scans_stale_;
+                s.scans_unknown_sensor = scans_unknown_sensor_;
+                s.scans_over_budget = scans_over_budget_;
+                s.returns_out_of_reach = returns_out_of_reach_;
+                s.evidence_stops = evidence_stops_;
             }
+            s.lcm_datagrams_lost = lcm_datagrams_lost();
+            s.log_lines_suppressed = log_lines_suppressed();
             s.can_state = can_state;
             lcm_.publish(opts_.status_channel, &s);
         }
@@ -670,8 +853,9 @@ void Daemon::clock_loop(const std::atomic<bool> &stop)
 
 // --- run -------------------------------------------------------------------
 
-int Daemon::run(const std::atomic<bool> &stop)
+int Daemon::run(const RunFlags &flags)
 {
+    const std::atomic<bool> &stop = flags.stop;
     if (!lcm_.good()) {
         log(LogLevel::error, "cannot open LCM at %s", opts_.lcm_url.c_str());
         return 1;
@@ -722,11 +906,18 @@ int Daemon::run(const std::atomic<bool> &stop)
     log(LogLevel::info, "listening on %s (scans %s*, requests %s)",
         opts_.lcm_url.c_str(), opts_.scan_channel.c_str(),
         opts_.request_channel.c_str());
-    std::thread planner([&] { planner_loop(stop); });
+    std::thread planner([&] { planner_loop(flags); });
     std::thread clock([&] { clock_loop(stop); });
     std::thread guard;
-    if (guard_planner_)
-        guard = std::thread([&] { guard_loop(stop); });
+    if (guard_planner_) {
+        guard = std::thread([&] { guard_loop(flags); });
+        // watched from now on: each thread has its full deadline to go
+        // round its loop for the first time
+        planner_beat_us_ = guard_beat_us_ = CanLink::now_us();
+        can_->set_host_check([this](uint64_t now, std::string *why) {
+            return host_alive(now, why);
+        });
+    }
     while (!stop)
         // the stop signal itself interrupts the wait: that is no failure
         if (lcm_.handleTimeout(100) < 0 && !stop) {
@@ -740,6 +931,7 @@ int Daemon::run(const std::atomic<bool> &stop)
     if (guard.joinable())
         guard.join();
     if (can_) {
+        can_->set_host_check(nullptr); // the threads it watched have ended
         can_->quick_stop();
         can_.reset(); // leaves the drives holding (docs/can-master.md)
         log(LogLevel::info, "drives stopped");

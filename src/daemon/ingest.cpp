@@ -1,5 +1,6 @@
 #include "ingest.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -81,13 +82,21 @@ std::string check_scan(const qrtplan::range_scan_t &s, long max_returns)
     return "";
 }
 
+double arm_reach_m(const double link_m[3], const double link_radius_m[3],
+                   double margin_m)
+{
+    double radius = std::max(link_radius_m[0],
+                             std::max(link_radius_m[1], link_radius_m[2]));
+    return link_m[0] + link_m[1] + link_m[2] + radius + margin_m;
+}
+
 std::string scan_to_points(const qrtplan::range_scan_t &s, long max_returns,
-                           ScanPoints *out)
+                           double reach_m, ScanPoints *out)
 {
     out->sensor = s.sensor_id;
     out->utime = s.utime;
     out->xyz.clear();
-    out->no_hit = out->invalid = 0;
+    out->no_hit = out->invalid = out->out_of_reach = 0;
     std::string why = check_scan(s, max_returns);
     if (!why.empty())
         return why;
@@ -117,6 +126,11 @@ std::string scan_to_points(const qrtplan::range_scan_t &s, long max_returns,
     Eigen::Matrix3d R = q.normalized().toRotationMatrix();
     Eigen::Vector3d t(s.position_m[0], s.position_m[1], s.position_m[2]);
     Eigen::Matrix3Xd world = (R * local).colwise() + t;
+    // beyond reach: no capsule of the arm, grown by the margin, can touch it
+    Eigen::Array<bool, Eigen::Dynamic, 1> near =
+        world.colwise().norm().array().transpose() <= reach_m;
+    out->out_of_reach = long((hit && !near).count());
+    hit = hit && near;
     long kept = long(hit.count());
     out->xyz.resize(size_t(kept) * 3);
     long k = 0;
@@ -129,41 +143,96 @@ std::string scan_to_points(const qrtplan::range_scan_t &s, long max_returns,
     return "";
 }
 
-void Picture::add(ScanPoints &&scan)
+bool Picture::add(ScanPoints &&scan, int64_t now_us)
 {
+    const long n = long(scan.xyz.size() / 3);
+    // what must stay: this scan and the newest scan of every other sensor
+    long kept = n;
+    for (const auto &kv : sensors_)
+        if (kv.first != scan.sensor && !kv.second.empty())
+            kept += long(kv.second.back().xyz.size() / 3);
+    if (kept > max_points_)
+        return false;
     if (scan.utime > newest_)
         newest_ = scan.utime;
+    int64_t &stamp = stamp_[scan.sensor];
+    stamp = std::max(stamp, scan.utime);
     auto &q = sensors_[scan.sensor];
     if (window_s_ <= 0.0)
-        q.clear();
+        while (!q.empty())
+            pop_oldest(&q);
+    points_ += n;
     q.push_back(std::move(scan));
-    const int64_t keep_from = newest_ - int64_t(window_s_ * 1e6);
-    while (!q.empty() && (q.size() > kMaxScansPerSensor ||
-                          (window_s_ > 0.0 && q.front().utime < keep_from)))
-        q.pop_front();
-    // other sensors' scans may have aged out of the window too
-    if (window_s_ > 0.0)
+    while (q.size() > kMaxScansPerSensor)
+        pop_oldest(&q);
+    // scans out of the window, by the daemon's clock: a scan stamped in
+    // the future is refused before it gets here, so it cannot purge others
+    if (window_s_ > 0.0) {
+        const int64_t keep_from = now_us - int64_t(window_s_ * 1e6);
         for (auto &kv : sensors_)
-            while (!kv.second.empty() && kv.second.front().utime < keep_from)
-                kv.second.pop_front();
+            while (kv.second.size() > 1 && kv.second.front().utime < keep_from)
+                pop_oldest(&kv.second);
+    }
+    // over the budget: the oldest scans that are not their sensor's newest
+    while (points_ > max_points_) {
+        std::deque<ScanPoints> *oldest = nullptr;
+        for (auto &kv : sensors_)
+            if (kv.second.size() > 1 &&
+                (!oldest || kv.second.front().utime < oldest->front().utime))
+                oldest = &kv.second;
+        if (!oldest)
+            break; // cannot happen: the newest scans fit (checked above)
+        pop_oldest(oldest);
+    }
+    return true;
+}
+
+void Picture::pop_oldest(std::deque<ScanPoints> *q)
+{
+    points_ -= long(q->front().xyz.size() / 3);
+    q->pop_front();
 }
 
 void Picture::gather(std::vector<double> *xyz) const
 {
     xyz->clear();
-    xyz->reserve(size_t(points()) * 3);
+    xyz->reserve(size_t(points_) * 3);
     for (const auto &kv : sensors_)
         for (const auto &s : kv.second)
             xyz->insert(xyz->end(), s.xyz.begin(), s.xyz.end());
 }
 
-long Picture::points() const
+Evidence Picture::evidence(int64_t now_us,
+                           const std::vector<std::string> &required,
+                           int64_t max_age_us) const
 {
-    long n = 0;
-    for (const auto &kv : sensors_)
-        for (const auto &s : kv.second)
-            n += long(s.xyz.size() / 3);
-    return n;
+    auto ms = [](int64_t us) { return std::to_string(us / 1000) + " ms"; };
+    if (required.empty()) {
+        if (stamp_.empty())
+            return {"no_obstacle_data", "no scan has been received yet"};
+        auto newest = stamp_.begin();
+        for (auto it = stamp_.begin(); it != stamp_.end(); ++it)
+            if (it->second > newest->second)
+                newest = it;
+        if (now_us - newest->second > max_age_us)
+            return {"stale_obstacle_data",
+                    "the newest scan (sensor '" + newest->first + "') is " +
+                        ms(now_us - newest->second) + " old, over the " +
+                        ms(max_age_us) + " allowed"};
+        return {};
+    }
+    for (const std::string &id : required)
+        if (stamp_.count(id) == 0)
+            return {"no_obstacle_data",
+                    "no scan from the required sensor '" + id + "' yet"};
+    for (const std::string &id : required) {
+        int64_t age = now_us - stamp_.at(id);
+        if (age > max_age_us)
+            return {"stale_obstacle_data",
+                    "the required sensor '" + id + "' last scanned " + ms(age) +
+                        " ago, over the " + ms(max_age_us) + " allowed"};
+    }
+    return {};
 }
 
 } // namespace qrt

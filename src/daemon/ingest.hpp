@@ -19,6 +19,19 @@ struct ScanPoints {
     std::vector<double> xyz; // 3 per point
     long no_hit = 0;         // range >= max range
     long invalid = 0;        // NaN/Inf angle or range, range <= 0
+    long out_of_reach = 0;   // farther from the base than the arm can come
+};
+
+// Whether the obstacle picture is evidence enough to move on: status ""
+// when it is, else the plan status that says why not (no_obstacle_data,
+// stale_obstacle_data) and one sentence naming the sensor.
+struct Evidence {
+    std::string status;
+    std::string detail;
+    bool fresh() const
+    {
+        return status.empty();
+    }
 };
 
 // Before decoding: does the buffer hold the returns its count claims? The
@@ -32,34 +45,62 @@ bool scan_claims_fit(const void *buf, int size, long max_returns,
 std::string check_scan(const qrtplan::range_scan_t &scan, long max_returns);
 
 // Validates the pose and converts every return (vectorised with Eigen: the
-// trigonometry runs over whole arrays, then one 3xN rotation). Returns ""
-// or why the whole scan is refused (non-finite or non-unit pose, bad max
-// range, too many returns).
+// trigonometry runs over whole arrays, then one 3xN rotation). Points
+// farther than reach_m from the base are dropped and counted: no part of
+// the arm can come within its margin of them. Returns "" or why the whole
+// scan is refused (non-finite or non-unit pose, bad max range, too many
+// returns).
 std::string scan_to_points(const qrtplan::range_scan_t &scan, long max_returns,
-                           ScanPoints *out);
+                           double reach_m, ScanPoints *out);
 
-// The newest scan of each sensor, or every scan of the last window_s
-// seconds (by the scans' own utime), bounded in count and points.
+// How far from the base origin an obstacle point can matter: every point
+// of the arm lies within the sum of the link lengths of the origin, its
+// surface a link radius beyond, and the margin beyond that.
+double arm_reach_m(const double link_m[3], const double link_radius_m[3],
+                   double margin_m);
+
+// The obstacle picture: the newest scan of each sensor, or every scan of
+// the last window_s seconds (by the daemon's clock), bounded in scans per
+// sensor and in points altogether (max_points). It also remembers each
+// sensor's newest accepted stamp, which is what freshness is judged by.
 class Picture
 {
   public:
-    explicit Picture(double window_s) : window_s_(window_s)
+    Picture(double window_s, long max_points)
+        : window_s_(window_s), max_points_(max_points)
     {
     }
-    void add(ScanPoints &&scan);
+    // Adds the scan, evicting the oldest scans that are not their sensor's
+    // newest while the picture holds more than max_points. False, with the
+    // picture unchanged, when the scan does not fit beside the newest scan
+    // of every other sensor: dropping those would erase what they saw.
+    bool add(ScanPoints &&scan, int64_t now_us);
     void gather(std::vector<double> *xyz) const;
-    long points() const;
+    long points() const
+    {
+        return points_;
+    }
     int64_t newest_utime() const
     {
         return newest_;
     }
+    // Fresh when every required sensor (any one sensor, if none is
+    // required) has an accepted scan stamped at most max_age_us before
+    // now_us; the stamps and now_us are the same clock (CLOCK_REALTIME).
+    Evidence evidence(int64_t now_us, const std::vector<std::string> &required,
+                      int64_t max_age_us) const;
 
     static constexpr size_t kMaxScansPerSensor = 64;
 
   private:
+    void pop_oldest(std::deque<ScanPoints> *q);
+
     double window_s_;
+    long max_points_;
+    long points_ = 0;
     int64_t newest_ = 0;
     std::map<std::string, std::deque<ScanPoints>> sensors_;
+    std::map<std::string, int64_t> stamp_; // newest accepted, per sensor
 };
 
 } // namespace qrt

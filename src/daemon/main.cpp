@@ -9,10 +9,15 @@
 
 namespace
 {
-std::atomic<bool> stop_requested{false};
-void on_signal(int)
+qrt::RunFlags flags;
+void on_signal(int sig)
 {
-    stop_requested = true;
+    if (sig == SIGUSR1)
+        flags.freeze_planner = true;
+    else if (sig == SIGUSR2)
+        flags.freeze_guard = true;
+    else
+        flags.stop = true;
 }
 } // namespace
 
@@ -42,6 +47,10 @@ int main(int argc, char **argv)
     sa.sa_handler = on_signal;
     sigaction(SIGINT, &sa, nullptr);
     sigaction(SIGTERM, &sa, nullptr);
+    if (opts.test_hooks) {
+        sigaction(SIGUSR1, &sa, nullptr);
+        sigaction(SIGUSR2, &sa, nullptr);
+    }
     qrt::Daemon daemon(opts);
-    return daemon.run(stop_requested);
+    return daemon.run(flags);
 }

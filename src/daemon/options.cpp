@@ -3,6 +3,7 @@
 #include "can_link.hpp"
 #include "qrtplan/qrtplan.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
@@ -44,6 +45,25 @@ const char *kUsage =
     "                           (as-read; the plan is the same)\n"
     "  --mask-threads 1|2       build a whole mask on 1 or 2 threads (2)\n"
     "  --max-returns N          refuse scans with more returns (1000000)\n"
+    "  --max-points N           points the obstacle picture holds, all\n"
+    "                           sensors together (2000000); returns beyond\n"
+    "                           the arm's reach are dropped first; a scan\n"
+    "                           that does not fit beside every other\n"
+    "                           sensor's newest is refused\n"
+    "  --require-sensor ID[,ID...]  a sensor every plan and every motion\n"
+    "                           needs a fresh scan from (repeatable; none:\n"
+    "                           any one sensor's fresh scan will do)\n"
+    "  --sensor ID[,ID...]      a further sensor taken but not required\n"
+    "                           (repeatable); with either list, scans from\n"
+    "                           sensors on neither are refused\n"
+    "  --max-scan-age SECONDS   evidence older than this is none: plans say\n"
+    "                           stale_obstacle_data and the arm stops (0.5)\n"
+    "  --max-clock-skew SECONDS a scan stamped further ahead of this\n"
+    "                           computer's clock is refused (0.05)\n"
+    "  --guard-deadline MS      with --can, the guard thread silent this\n"
+    "                           long stops the arm and the CAN heartbeat\n"
+    "                           (200)\n"
+    "  --planner-deadline MS    likewise for the planner thread (2000)\n"
     "  --margin M               workspace margin, metres (0.01)\n"
     "  --cspace-margin DEG      C-space margin (paper Eq. 12), degrees (0)\n"
     "  --grid DEG               lattice spacing, degrees (5)\n"
@@ -67,7 +87,12 @@ const char *kUsage =
     "                           every joint, or one each\n"
     "  --heartbeat-timeout MS   a drive silent this long is lost (300)\n"
     "  --sdo-timeout MS         one SDO attempt of three (50)\n"
+    "  --consumer-heartbeat MS  each drive is told to quick-stop when it\n"
+    "                           hears no heartbeat of ours this long (0x1016,\n"
+    "                           0x6007; 300)\n"
     "  --log-level LEVEL        error, warn, info or debug (info)\n"
+    "  --test-hooks             SIGUSR1 freezes the planner thread, SIGUSR2\n"
+    "                           the guard thread (for the watchdog's tests)\n"
     "  --config FILE            read settings from FILE first\n"
     "  --help, --version\n"
     "SIGINT/SIGTERM: quick stop (with --can), then a clean exit.\n";
@@ -83,6 +108,33 @@ bool to_double(const std::string &s, double *out)
     if (s.empty() || errno || *end || !std::isfinite(v))
         return false;
     *out = v;
+    return true;
+}
+
+// "a,b,c": sensor ids as scans carry them (1..64 characters, no control
+// characters; a comma separates). Appended to *ids, each once.
+bool add_sensor_ids(const std::string &text, std::vector<std::string> *ids)
+{
+    std::vector<std::string> got;
+    size_t from = 0;
+    while (true) {
+        size_t comma = text.find(',', from);
+        std::string id =
+            text.substr(from, comma == std::string::npos ? std::string::npos
+                                                         : comma - from);
+        if (id.empty() || id.size() > 64)
+            return false;
+        for (char c : id)
+            if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+                return false;
+        got.push_back(id);
+        if (comma == std::string::npos)
+            break;
+        from = comma + 1;
+    }
+    for (const std::string &id : got)
+        if (std::find(ids->begin(), ids->end(), id) == ids->end())
+            ids->push_back(id);
     return true;
 }
 
@@ -143,6 +195,29 @@ bool apply(Options *o, const std::string &key, const std::string &value,
         if (!number(1, 50000000) || v != std::floor(v))
             return bad("a count in 1..50000000");
         o->max_returns = long(v);
+    } else if (key == "max-points") {
+        if (!number(1000, 100000000) || v != std::floor(v))
+            return bad("a count in 1000..100000000");
+        o->max_points = long(v);
+    } else if (key == "require-sensor" || key == "sensor") {
+        if (!add_sensor_ids(value, key == "sensor" ? &o->other_sensors
+                                                   : &o->required_sensors))
+            return bad("sensor ids of 1..64 characters, comma-separated");
+    } else if (key == "max-scan-age") {
+        if (!number(0.01, 60))
+            return bad("seconds in 0.01..60");
+        o->max_scan_age_s = v;
+    } else if (key == "max-clock-skew") {
+        if (!number(0, 1))
+            return bad("seconds in 0..1");
+        o->max_clock_skew_s = v;
+    } else if (key == "guard-deadline" || key == "planner-deadline") {
+        if (!number(20, 60000))
+            return bad("milliseconds in 20..60000");
+        (key == "guard-deadline" ? o->guard_deadline_s
+                                 : o->planner_deadline_s) = v * 1e-3;
+    } else if (key == "test-hooks") {
+        o->test_hooks = true;
     } else if (key == "margin") {
         if (!number(0, 1))
             return bad("metres in 0..1");
@@ -184,6 +259,11 @@ bool apply(Options *o, const std::string &key, const std::string &value,
         if (!number(20, 60000))
             return bad("milliseconds in 20..60000");
         o->can.heartbeat_timeout_us = uint32_t(v * 1000.0);
+    } else if (key == "consumer-heartbeat") {
+        if (!number(101, 65535) || v != std::floor(v))
+            return bad("whole milliseconds in 101..65535, above the master's "
+                       "100 ms heartbeat period");
+        o->can.consumer_heartbeat_ms = uint16_t(v);
     } else if (key == "sdo-timeout") {
         if (!number(1, 10000))
             return bad("milliseconds in 1..10000");
@@ -202,7 +282,7 @@ bool apply(Options *o, const std::string &key, const std::string &value,
 
 bool takes_no_value(const std::string &key)
 {
-    return key == "dijkstra";
+    return key == "dijkstra" || key == "test-hooks";
 }
 
 bool read_config(const std::string &path, Options *o, std::string *error)

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 extern "C" {
 #include "qrtcan/master.h"
@@ -22,9 +23,21 @@ struct Options {
     bool mask_as_read = true;   // qrt_planner_plan_now, else the whole mask
     int mask_threads = 2;       // 1 or 2 (qrt_planner_build_mask_part)
     long max_returns = 1000000; // per scan; larger scans are rejected
-    qrt_params params{};        // arm, margins, grid (qrt_params_default)
-    std::string can_iface;      // empty: no CAN
-    qrtcan_master_config can{}; // nodes, scales, speeds
+    // the sensors whose fresh scans every plan and every motion needs; with
+    // none, any one sensor's fresh scan will do
+    std::vector<std::string> required_sensors;
+    // further sensors taken but not required; with either list given, a
+    // scan from a sensor on neither is refused
+    std::vector<std::string> other_sensors;
+    double max_scan_age_s = 0.5;     // older evidence is no evidence
+    double max_clock_skew_s = 0.05;  // a scan stamped further ahead is refused
+    long max_points = 2000000;       // in the obstacle picture, all sensors
+    double guard_deadline_s = 0.2;   // the guard thread silent this long: stop
+    double planner_deadline_s = 2.0; // the planner thread likewise
+    bool test_hooks = false;         // SIGUSR1/SIGUSR2 freeze the planner/guard
+    qrt_params params{};             // arm, margins, grid (qrt_params_default)
+    std::string can_iface;           // empty: no CAN
+    qrtcan_master_config can{};      // nodes, scales, speeds
     std::string log_level = "info";
 };
 

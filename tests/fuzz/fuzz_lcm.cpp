@@ -40,11 +40,19 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         if (used >= 0 && qrt::check_scan(scan, 100000).empty()) {
             round_trip(scan, used);
             qrt::ScanPoints sp;
-            if (qrt::scan_to_points(scan, 100000, &sp).empty()) {
+            if (qrt::scan_to_points(scan, 100000, 1.0, &sp).empty()) {
                 if (sp.xyz.size() % 3 != 0)
                     __builtin_trap();
-                qrt::Picture pic(0.5);
-                pic.add(std::move(sp));
+                for (size_t i = 0; i < sp.xyz.size(); i += 3)
+                    if (sp.xyz[i] * sp.xyz[i] + sp.xyz[i + 1] * sp.xyz[i + 1] +
+                            sp.xyz[i + 2] * sp.xyz[i + 2] >
+                        1.0 + 1e-9)
+                        __builtin_trap(); // beyond reach must be dropped
+                qrt::Picture pic(0.5, 50000);
+                long n = long(sp.xyz.size() / 3);
+                bool fits = pic.add(std::move(sp), scan.utime);
+                if (fits != (n <= 50000) || pic.points() != (fits ? n : 0))
+                    __builtin_trap();
                 std::vector<double> xyz;
                 pic.gather(&xyz);
                 for (double v : xyz)
