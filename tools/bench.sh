@@ -43,6 +43,29 @@ if [ -x build/bin/qrtpland ] && [ -x build/bin/servo_sim ]; then
         grep -E "quick-stop frame|failures" | tee -a "$out/table5.txt" || true
 fi
 
+# what stops the arm when the daemon dies (SIGKILL: the drives' heartbeat
+# consumers) or a required sensor goes silent (the guard's evidence timer),
+# in the SocketCAN VM: tests/canlink/test_failsafe_vm.py measuring, N trials
+# each; skipped with a message where there is no vcan
+if [ -x build/bin/qrtpland ] && [ -x build/bin/servo_sim ]; then
+    for scenario in kill sensor_silent; do
+        rc=0
+        tools/vm/run.sh -- .venv/bin/python tests/canlink/test_failsafe_vm.py \
+            --scenario "$scenario" --trials "${QRT_BENCH_FAILSAFE_TRIALS:-5}" \
+            --daemon build/bin/qrtpland --servo-sim build/bin/servo_sim \
+            --lcmtypes build/lcmtypes/python --out "$out/failsafe" \
+            >"$out/failsafe_$scenario.log" 2>&1 || rc=$?
+        if [ "$rc" -eq 77 ]; then
+            echo "failsafe: $scenario skipped: no vcan0 on this host and no" \
+                "VM to make one (tools/vm/run.sh)" | tee -a "$out/table5.txt"
+        elif ! grep -E "^failsafe: " "$out/failsafe_$scenario.log" |
+            tee -a "$out/table5.txt"; then
+            echo "failsafe: $scenario measured nothing (exit $rc; see" \
+                "$out/failsafe_$scenario.log)" | tee -a "$out/table5.txt"
+        fi
+    done
+fi
+
 # qrtplan against OMPL (issue 6): the same scenes, interleaved, oracle-checked;
 # in turn (each planner after the others), replanning (each planner after its
 # own plan of the scan before), and cold (each planner after the caches are

@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # The closed loop on vcan0 (this host's, else in the tests' VM, which makes
 # one: tools/vm/run.sh): servo_sim's three drives power up at the
-# Table 4 start, qrtpland gets the Table 4 sphere as a range scan and the
-# goal as a plan request, plans from the joints the drives report and moves
-# them; the joints it publishes are traced into build/demo/can_trace.csv,
-# checked with the oracle and drawn over the plan (can_trace.png).
+# Table 4 start, qrtpland gets the Table 4 sphere as range scans (a freshly
+# stamped one every 0.1 s, as a sensor sends them: the daemon moves the arm
+# only on evidence younger than --max-scan-age) and the goal as a plan
+# request, plans from the joints the drives report and moves them; the
+# joints it publishes are traced into build/demo/can_trace.csv, checked
+# with the oracle and drawn over the plan (can_trace.png).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=build/demo
@@ -38,8 +40,9 @@ daemon=$!
 trap 'kill $daemon $sim 2>/dev/null; wait 2>/dev/null' EXIT
 QRT_LCMTYPES_PY=build/lcmtypes/python .venv/bin/python - "$url" "$out" <<'PY'
 import csv, os, sys, time
-sys.path[:0] = ["tests/daemon", "tools"]
+sys.path[:0] = ["tests/daemon", "tools", "tests/canlink"]
 import conftest as cf, lcm, numpy as np, oracle
+from vm_checks import ScanFeed
 url, out = sys.argv[1], sys.argv[2]
 lc = lcm.LCM(url)
 joints, plans = [], []
@@ -52,11 +55,13 @@ def pump(s, until):
     return until()
 scene, pts = cf.scene_points("table4_one_sphere.json")
 pump(15, lambda: joints and joints[-1].drive_state == "ready")
-lc.publish("QRT_SCAN", cf.scan_from_points(pts).encode())
+feed = ScanFeed(url, cf, pts)  # the sensor: a fresh scan every 0.1 s
+pump(1, lambda: feed.published > 0)
 lc.publish("QRT_PLAN_REQUEST", cf.request([100, 0, 0], request_id=1).encode())
 pump(10, lambda: any(j.moving for j in joints))
 ok = pump(60, lambda: joints and not joints[-1].moving and
           abs(oracle.wrap180(joints[-1].joints_deg[0] - 100)) < 0.05)
+feed.stop()
 q = np.array([j.joints_deg for j in joints])
 with open(os.path.join(out, "can_trace.csv"), "w", newline="") as f:
     w = csv.writer(f)

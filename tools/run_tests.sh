@@ -52,14 +52,15 @@ ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
     -DQRT_SANITIZE=ON -DQRT_PYTHON_TESTS=ON
 
 # The tests that run threads (the daemon's planner, clock, guard and CAN link
-# threads; the two-thread mask; qrtplan-exec's CAN link), built with
+# threads, its watchdog over them and a goal changed mid-move; the
+# two-thread mask; qrtplan-exec's CAN link), built with
 # ThreadSanitizer. A race is logged, not fatal, so that every test runs; any
 # log fails the step.
 tsan_logs="$PWD/build-tsan/races"
 rm -rf "$tsan_logs"
 mkdir -p "$tsan_logs"
 TSAN_OPTIONS="halt_on_error=0 log_path=$tsan_logs/race" \
-    ctest_args="-R ^(test_mask_threads|daemon_tests|daemon_can_vm|daemon_soak_vm|can_exec_vm|canopen_drive_vm)$" \
+    ctest_args="-R ^(test_mask_threads|daemon_tests|daemon_can_vm|daemon_soak_vm|can_exec_vm|canopen_drive_vm|failsafe_watchdog_vm|failsafe_goal_change_vm)$" \
     run_suite "ThreadSanitizer build (the tests that run threads)" build-tsan \
     -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQRT_TSAN=ON -DQRT_PYTHON_TESTS=ON
 if ls "$tsan_logs"/race* >/dev/null 2>&1; then

@@ -6,14 +6,17 @@ this host's kernel has no CAN), and by `make bench` for the stop latency
 (--trials 200). servo_sim powers up at the paper's Table 4 start; the
 daemon gets the Table 4 sphere as a scan and a goal with no start, so it
 plans from the joints the drives report (their own counts per degree and
-counts at 0 degrees, given to both sides), and moves the arm:
+counts at 0 degrees, given to both sides), and moves the arm. The scene
+comes as a sensor would send it, a freshly stamped scan every 0.1 s
+(vm_checks.ScanFeed): the daemon moves the arm only on evidence younger
+than --max-scan-age.
   1. the joints the daemon publishes (from the drives' PDOs) reach the
      goal, and every pose on the way is collision-free by the oracle;
-  2. trials: while the arm moves, a scan puts an obstacle on the rest of
+  2. trials: while the arm moves, the scans put an obstacle on the rest of
      its path; the daemon reports the blocked path and sends a quick stop;
      the time from that scan's publication to the first quick-stop frame on
-     the bus (candump's timestamp) is the stop latency. A clear scan then
-     lets it move on (the next plan executes);
+     the bus (candump's timestamp) is the stop latency. Clear scans then
+     let it move on (the next plan executes);
   3. the interface goes down for a second while the arm moves and comes
      back: the status reports the bus fault, the daemon stays up, brings
      the drives up again by itself, and the next plans take the arm on;
@@ -47,8 +50,8 @@ import conftest as cf  # noqa: E402
 import lcm  # noqa: E402
 import oracle  # noqa: E402
 from candump_capture import drain, dropped, start  # noqa: E402
-from vm_checks import (DaemonWatch, check, failures,  # noqa: E402
-                       stop_daemon_and_drives)
+from vm_checks import (DaemonWatch, ScanFeed, check,  # noqa: E402
+                       failures, stop_daemon_and_drives)
 
 # TPDO1 of nodes 1 and 2 with too few bytes (candump's spelling)
 MALFORMED = ("181#00", "182#0102")
@@ -104,6 +107,7 @@ def main():
     goal = [100.0, 0.0, 0.0]
     t0 = time.time()
     latencies, sent_times = [], []
+    feed = None
     try:
         ok = pump(15, lambda: joints and joints[-1].drive_state == "ready")
         check(ok, f"the daemon brought the drives up ({time.time() - t0:.1f} s)")
@@ -114,8 +118,9 @@ def main():
               np.allclose(here, [-100, 0, 0], atol=0.02),
               f"the daemon reads the drives, each geared and zeroed its own "
               f"way, where they stand: {here}")
-        clear = cf.scan_from_points(pts)
-        lc.publish("QRT_SCAN", clear.encode())
+        # the sensor: the Table 4 sphere, a fresh scan every 0.1 s
+        feed = ScanFeed(url, cf, pts)
+        pump(1, lambda: feed.published > 0)
         lc.publish("QRT_PLAN_REQUEST", cf.request(goal, request_id=1).encode())
         moved = pump(10, lambda: any(j.moving for j in joints))
         check(moved, "the arm moves along the plan")
@@ -130,21 +135,20 @@ def main():
         for trial in range(args.trials):
             moving = pump(15, lambda: joints and joints[-1].moving)
             if not moving:
-                # (re)start: a clear scan lets the daemon plan from here
-                lc.publish("QRT_SCAN", cf.scan_from_points(pts).encode())
+                # (re)start: a clear scan at once lets the daemon plan from
+                # here (the feed's next would too)
+                feed.set(pts)
                 moving = pump(15, lambda: joints and joints[-1].moving)
             if not moving:
                 check(False, f"trial {trial}: the arm did not move")
                 break
             n_plans = len(plans)
+            # the sensor sees the wall from now on: its first scan of it is
             # stamped when the encoded scan goes to LCM, as a sensor driver
             # would publish it (building it in numpy on the emulated CPU
-            # takes milliseconds that are not the daemon's)
-            blocking = cf.scan_from_points(wall)
-            blocking.utime = cf.now_us()
-            data = blocking.encode()
-            sent = time.time()
-            lc.publish("QRT_SCAN", data)
+            # takes milliseconds that are not the daemon's), and sent is
+            # when it went
+            sent = feed.set(wall)
             got = pump(15, lambda: any(p.executing_path_blocked
                                        for p in plans[n_plans:]))
             stopped = pump(15, lambda: joints and not joints[-1].moving and
@@ -154,7 +158,7 @@ def main():
                 continue
             sent_times.append(sent)
             # recover: clear picture, the next plan executes
-            lc.publish("QRT_SCAN", cf.scan_from_points(pts).encode())
+            feed.set(pts)
         # (candump writes line by line: stdbuf -oL; a block-buffered capture
         # would not yet hold the stop frames when they are looked for)
         check(len(sent_times) == args.trials,
@@ -162,7 +166,7 @@ def main():
         # the bus goes down for a second while the arm moves, and comes
         # back: the daemon reports it, stays up, brings the drives up again
         # by itself, and the next scan's plan goes on from where they stopped
-        lc.publish("QRT_SCAN", cf.scan_from_points(pts).encode())
+        feed.set(pts)
         moving = pump(15, lambda: joints and joints[-1].moving)
         check(moving, "the arm is moving before the bus goes down")
         seen = len(statuses)
@@ -189,7 +193,7 @@ def main():
         pump(3, lambda: len(statuses) > n_status)
         bus_errors = statuses[-1].can_bus_errors if statuses else -1
         # finally to the goal
-        lc.publish("QRT_SCAN", cf.scan_from_points(pts).encode())
+        feed.set(pts)
         reached = pump(60, lambda: watch.at_rest_at(goal))
         if not reached:  # keep scanning: every scan replans from here
             reached = watch.rescan_until(
@@ -222,6 +226,8 @@ def main():
                   f"{st.can_bus_errors} (all from the unplugging)"
                   if st else "no status"))
     finally:
+        if feed:
+            feed.stop()
         stop_daemon_and_drives(daemon, sim)
         drained = drain(capture)
         dump.terminate()

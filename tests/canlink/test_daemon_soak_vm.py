@@ -7,17 +7,20 @@ this host's kernel has no CAN). servo_sim powers up at the paper's Table 4
 start; the Table 4 sphere comes as a scan every 0.1 s, each copy with its
 points moved by up to 2 mm (so the daemon replans on every one), and a new
 goal, drawn from the free poses below, every 0.5-3.5 s, mostly while the
-arm is still moving (the drives take a new path only at rest: the daemon
-finishes the one it has and plans from where it stopped). Then, once the
-arm rests at the soak's last goal, a goal far from there and, while the arm
+arm is still moving (a new goal while the drives execute a path stops
+them: the new path starts from rest). After the soak the sphere keeps
+coming, a fresh scan every 0.1 s (vm_checks.ScanFeed: the daemon moves the
+arm only on evidence younger than --max-scan-age). Then, once the arm
+rests at the soak's last goal, a goal far from there and, while the arm
 moves towards it, a last goal that it must reach. Checks:
   1. every joint state the daemon publishes is clear of the sphere by the
      independent oracle, to within the scans' noise (2 mm a coordinate);
   2. every plan is ok, at least one for each goal, and the daemon never
      stops answering and exits cleanly;
   3. the last goal is reached;
-  4. its status: no scan refused, no CAN frame malformed, dropped or
-     unsent, no bus error (scans replaced by newer ones before a plan used
+  4. its status: no scan refused (malformed, stale, from the future, from
+     an unknown sensor), no CAN frame malformed, dropped or unsent, no bus
+     error (scans replaced by newer ones before a plan used
      them are counted, not failed: how many depends on the machine).
 """
 import argparse
@@ -38,8 +41,8 @@ if "--lcmtypes" in sys.argv:
 import conftest as cf  # noqa: E402
 import lcm  # noqa: E402
 import oracle  # noqa: E402
-from vm_checks import (DaemonWatch, check, failures,  # noqa: E402
-                       joint_gap, stop_daemon_and_drives)
+from vm_checks import (DaemonWatch, ScanFeed, check,  # noqa: E402
+                       failures, joint_gap, stop_daemon_and_drives)
 
 NOISE_M = 0.002
 # a point moved by NOISE_M on each axis moves by up to this much
@@ -86,6 +89,7 @@ def main():
     requests = moving_requests = 0
     goal = START  # the arm's goal until the soak gives one
     t0 = time.time()
+    feed = None
     try:
         ready = pump(15, lambda: joints and joints[-1].drive_state == "ready")
         check(ready, "the daemon brought the drives up")
@@ -110,14 +114,19 @@ def main():
         # already resting there would never start it moving (the soak's
         # timing, hence where it ends, depends on the machine)
         soak_goal = goal
+        # from here on the sensor keeps scanning on its own (the waits
+        # below pump for a second between their own scans, longer than
+        # --max-scan-age)
+        feed = ScanFeed(url, cf, pts)
+
         def scan():
             return cf.scan_from_points(pts).encode()
         check(watch.rescan_until(scan, lambda: watch.at_rest_at(soak_goal),
                                  60, 1.0),
               f"the arm came to rest at the soak's last goal {soak_goal}")
         # the last goal is given while the arm moves towards another, far
-        # from where it rests: the daemon must finish that path and then go
-        # on to this one
+        # from where it rests: the daemon must stop on that path and go on
+        # to this one from rest
         towards = max(free, key=lambda g: joint_gap(g, soak_goal))
         goal = max((g for g in free if g not in (towards, soak_goal)),
                    key=lambda g: joint_gap(g, towards))
@@ -138,6 +147,8 @@ def main():
         seen = len(statuses)
         pump(3, lambda: len(statuses) > seen)
     finally:
+        if feed:
+            feed.stop()
         stop_daemon_and_drives(daemon, sim)
     check(daemon.returncode == 0, f"clean shutdown (exit {daemon.returncode})")
     kinds = {}
@@ -157,11 +168,15 @@ def main():
           f"{-NOISE_BOUND_M:.4f})")
     st = statuses[-1] if statuses else None
     check(st is not None and st.scans_rejected == 0 and
+          st.scans_stale == 0 and st.scans_future == 0 and
+          st.scans_unknown_sensor == 0 and
           st.can_frames_malformed == 0 and st.can_frames_dropped == 0 and
           st.can_frames_unsent == 0 and st.can_bus_errors == 0 and
           st.can_frames_sent > 0 and st.can_frames_received > 0,
           "status: " + (f"scans {st.scans_received} (dropped {st.scans_dropped}, "
-                        f"refused {st.scans_rejected}); CAN sent {st.can_frames_sent}, "
+                        f"refused {st.scans_rejected}, stale {st.scans_stale}, "
+                        f"from the future {st.scans_future}, unknown sensor "
+                        f"{st.scans_unknown_sensor}); CAN sent {st.can_frames_sent}, "
                         f"received {st.can_frames_received}, malformed "
                         f"{st.can_frames_malformed}, dropped {st.can_frames_dropped}, "
                         f"unsent {st.can_frames_unsent}, bus errors {st.can_bus_errors}"

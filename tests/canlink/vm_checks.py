@@ -1,8 +1,14 @@
 """What the CAN VM tests share: their "ok"/"FAIL" lines, what qrtpland
-publishes on LCM, collected as it arrives, how far a pose is from a goal,
-and stopping it and the drives. (The importer puts tools/ on sys.path.)"""
+publishes on LCM, collected as it arrives, a sensor that keeps scanning
+(ScanFeed), how far a pose is from a goal, what a candump capture says
+about the drives, and stopping the daemon and the drives. (The importer
+puts tools/ and tests/daemon/ on sys.path.)"""
 import subprocess
+import threading
 import time
+
+import lcm
+import numpy as np
 
 import oracle
 
@@ -56,6 +62,78 @@ class DaemonWatch:
         return False
 
 
+class ScanFeed:
+    """A sensor that keeps scanning: the current scene as a range scan
+    (conftest.scan_from_points with the generated types in `types`),
+    stamped afresh and published every `period` seconds, as a sensor driver
+    would. qrtpland takes a scan as evidence for --max-scan-age only (0.5 s
+    by default): one scan and then silence stops the arm.
+
+    It publishes from its own thread on its own LCM instance (an LCM object
+    must not publish in one thread while another handles on it); the
+    caller's instance stays the caller's. points None or empty: scans with
+    no returns (evidence of free space within max_range)."""
+
+    def __init__(self, url, types, points=None, sensor="s0", period=0.1,
+                 channel="QRT_SCAN"):
+        self.types, self.sensor, self.period = types, sensor, period
+        self.channel = channel
+        self.lc = lcm.LCM(url)
+        self.lock = threading.Lock()  # the message, the instance, the stamps
+        self.published = 0
+        self.last_utime = None  # stamp of the newest scan published (us)
+        self.last_sent = None   # time.time() when it was published
+        self.msg = self._make(points)
+        self.next = time.time()
+        self.stopping = threading.Event()
+        self.thread = threading.Thread(target=self._run, daemon=True,
+                                       name="scan feed " + sensor)
+        self.thread.start()
+
+    def _make(self, points):
+        pts = np.zeros((0, 3)) if points is None else \
+            np.asarray(points, float).reshape(-1, 3)
+        return self.types.scan_from_points(pts, sensor=self.sensor)
+
+    def _publish(self):
+        # caller holds the lock; stamped as the encoded scan goes to LCM
+        self.msg.utime = self.types.now_us()
+        data = self.msg.encode()
+        self.lc.publish(self.channel, data)
+        self.last_sent = time.time()
+        self.last_utime = self.msg.utime
+        self.published += 1
+        self.next = self.last_sent + self.period
+
+    def _run(self):
+        while not self.stopping.is_set():
+            with self.lock:
+                if self.stopping.is_set():
+                    break
+                if time.time() >= self.next:
+                    self._publish()
+                wait = self.next - time.time()
+            self.stopping.wait(max(0.001, min(wait, self.period)))
+
+    def set(self, points):
+        """Show `points` from now on: published at once (the period starts
+        again from here). Returns the time.time() of that publication."""
+        msg = self._make(points)  # built outside the lock: numpy takes time
+        with self.lock:
+            self.msg = msg
+            if not self.stopping.is_set():
+                self._publish()
+            return self.last_sent
+
+    def stop(self):
+        """The sensor goes silent: nothing is published after this returns.
+        Returns the stamp (us) of the last scan published, None if none."""
+        with self.lock:
+            self.stopping.set()
+        self.thread.join(5)
+        return self.last_utime
+
+
 def joint_gap(a, b):
     """The largest joint difference between two poses, in degrees (alpha
     wraps)."""
@@ -73,3 +151,94 @@ def stop_daemon_and_drives(daemon, sim):
         daemon.kill()
     sim.terminate()
     sim.wait(10)
+
+
+# --- what a candump -L capture says (candump_capture.start) ----------------
+
+MASTER_HEARTBEAT = 0x700 + 127  # the master's node id is 127
+
+
+def read_capture(capture):
+    """The frames of a candump -L capture, in order: (time, COB-ID, data)
+    with the kernel's receive time (CLOCK_REALTIME seconds, as time.time())."""
+    out = []
+    with open(capture) as f:
+        for line in f:
+            parts = line.split()
+            if len(parts) < 3 or "#" not in parts[2] or \
+                    not parts[0].startswith("("):
+                continue
+            ident, data = parts[2].split("#", 1)
+            if data.startswith("R"):
+                continue  # remote frames carry no data
+            try:
+                out.append((float(parts[0].strip("()")), int(ident, 16),
+                            bytes.fromhex(data)))
+            except ValueError:
+                continue
+    return out
+
+
+def quick_stop_frames(frames, nodes=(1, 2, 3)):
+    """(time, node) of every RPDO1 whose controlword is the CiA 402 quick
+    stop command (bits 7, 2, 1 = 0, 0, 1: cw & 0x86 == 0x02)."""
+    out = []
+    for t, ident, data in frames:
+        node = ident - 0x200
+        if node in nodes and len(data) >= 2 and \
+                int.from_bytes(data[:2], "little") & 0x86 == 0x02:
+            out.append((t, node))
+    return out
+
+
+def quick_stop_onsets(frames, nodes=(1, 2, 3)):
+    """(time, node) of the quick-stop RPDO1s that start a stop: the node's
+    RPDO1 before was something else. (A stopped master repeats the quick
+    stop controlword after every SYNC until the next path.)"""
+    out, last = [], {}
+    stops = set(quick_stop_frames(frames, nodes))
+    for t, ident, data in frames:
+        node = ident - 0x200
+        if node not in nodes or len(data) < 2:
+            continue
+        qs = (t, node) in stops
+        if qs and last.get(node) is False:
+            out.append((t, node))
+        last[node] = qs
+    return out
+
+
+def tpdo_poses(frames, counts_per_deg=(1000.0,) * 3, offset_counts=(0,) * 3,
+               nodes=(1, 2, 3)):
+    """The drives' own positions, densely: their TPDO1s (statusword,
+    position actual in counts) after every SYNC, as joint degrees with each
+    drive's scale and counts at 0 degrees (alpha wrapped). One pose per
+    TPDO1 once every drive has sent one. Returns (times, poses (N, 3),
+    statuswords (N, 3))."""
+    last_pos, last_sw = [None] * 3, [None] * 3
+    ts, qs, sws = [], [], []
+    for t, ident, data in frames:
+        if ident - 0x180 not in nodes or len(data) != 6:
+            continue
+        j = nodes.index(ident - 0x180)
+        last_sw[j] = int.from_bytes(data[:2], "little")
+        last_pos[j] = int.from_bytes(data[2:6], "little", signed=True)
+        if None in last_pos:
+            continue
+        q = [(last_pos[k] - offset_counts[k]) / counts_per_deg[k]
+             for k in range(3)]
+        q[0] = oracle.wrap180(q[0])
+        ts.append(t)
+        qs.append(q)
+        sws.append(list(last_sw))
+    return np.array(ts), np.array(qs).reshape(-1, 3), np.array(sws).reshape(-1, 3)
+
+
+def quick_stop_active(statusword):
+    """CiA 402: Quick Stop Active is xxxx xxxx x00x 0111."""
+    return statusword & 0x006F == 0x0007
+
+
+def switch_on_disabled(statusword):
+    """CiA 402: Switch On Disabled is xxxx xxxx x1xx 0000."""
+    return statusword & 0x004F == 0x0040
