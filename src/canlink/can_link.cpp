@@ -438,7 +438,6 @@ CanLinkStatus CanLink::status() const
     for (int i = 0; i < master_.n_waypoints; i++)
         s.path.push_back({master_.path_deg[i][0], master_.path_deg[i][1],
                           master_.path_deg[i][2]});
-    s.host_alive = host_alive_;
     s.host_watchdog_trips = host_watchdog_trips_;
     return s;
 }

@@ -39,8 +39,7 @@ struct CanLinkStatus {
     // the path the master is executing, waypoints in degrees: empty when
     // it has none (at rest, stopped, ramping down, faulted)
     std::vector<std::array<double, 3>> path;
-    bool host_alive = true;                // the host check's last answer
-    unsigned long host_watchdog_trips = 0; // times it answered no
+    unsigned long host_watchdog_trips = 0; // times the host check said no
 };
 
 // "A,B,C": the drive node ids of alpha, sigma and eta, as the daemon's

@@ -153,8 +153,6 @@ bool Picture::add(ScanPoints &&scan, int64_t now_us)
             kept += long(kv.second.back().xyz.size() / 3);
     if (kept > max_points_)
         return false;
-    if (scan.utime > newest_)
-        newest_ = scan.utime;
     int64_t &stamp = stamp_[scan.sensor];
     stamp = std::max(stamp, scan.utime);
     auto &q = sensors_[scan.sensor];
@@ -193,6 +191,18 @@ void Picture::pop_oldest(std::deque<ScanPoints> *q)
     q->pop_front();
 }
 
+std::map<std::string, int64_t>::const_iterator Picture::newest_stamp() const
+{
+    return std::max_element(
+        stamp_.begin(), stamp_.end(),
+        [](const auto &a, const auto &b) { return a.second < b.second; });
+}
+
+int64_t Picture::newest_utime() const
+{
+    return stamp_.empty() ? 0 : newest_stamp()->second;
+}
+
 void Picture::gather(std::vector<double> *xyz) const
 {
     xyz->clear();
@@ -210,10 +220,7 @@ Evidence Picture::evidence(int64_t now_us,
     if (required.empty()) {
         if (stamp_.empty())
             return {"no_obstacle_data", "no scan has been received yet"};
-        auto newest = stamp_.begin();
-        for (auto it = stamp_.begin(); it != stamp_.end(); ++it)
-            if (it->second > newest->second)
-                newest = it;
+        auto newest = newest_stamp();
         if (now_us - newest->second > max_age_us)
             return {"stale_obstacle_data",
                     "the newest scan (sensor '" + newest->first + "') is " +

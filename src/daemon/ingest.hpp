@@ -80,10 +80,7 @@ class Picture
     {
         return points_;
     }
-    int64_t newest_utime() const
-    {
-        return newest_;
-    }
+    int64_t newest_utime() const; // the newest accepted stamp, 0 if none
     // Fresh when every required sensor (any one sensor, if none is
     // required) has an accepted scan stamped at most max_age_us before
     // now_us; the stamps and now_us are the same clock (CLOCK_REALTIME).
@@ -94,11 +91,12 @@ class Picture
 
   private:
     void pop_oldest(std::deque<ScanPoints> *q);
+    // the sensor with the newest accepted stamp; stamp_ must not be empty
+    std::map<std::string, int64_t>::const_iterator newest_stamp() const;
 
     double window_s_;
     long max_points_;
     long points_ = 0;
-    int64_t newest_ = 0;
     std::map<std::string, std::deque<ScanPoints>> sensors_;
     std::map<std::string, int64_t> stamp_; // newest accepted, per sensor
 };
