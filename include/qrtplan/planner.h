@@ -17,6 +17,7 @@
 #ifndef QRTPLAN_PLANNER_H
 #define QRTPLAN_PLANNER_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "qrtplan/arm.h"
@@ -251,9 +252,88 @@ struct qrt_planner {
     uint64_t rows_ready[QRT_ROW_SET_WORDS];
 };
 
-/* QRT_OK; QRT_E_INVALID for non-finite or negative margins, a bad arm or a
- * bad grid; QRT_E_TOO_BIG when the lattice exceeds this build. */
-int qrt_planner_init(struct qrt_planner *pl, const struct qrt_params *params);
+/* The ABI guard. The sizes of struct qrt_planner and struct qrt_plan come
+ * from the compile-time settings above, which the caller's compiler reads
+ * in these headers and the library's compiler read when the library was
+ * built. Should they differ (a program compiled with -DQRT_MAX_POINTS=1024
+ * against a library built with 16384), the library would write its larger
+ * layout into the caller's smaller struct and overrun it. So every caller
+ * describes its own build to the library (qrt_planner_init below does it
+ * for you), and the library refuses, before it touches the planner, a
+ * build that is not its own. The record holds only longs, so its layout
+ * does not depend on the settings it reports; abi_bytes comes first so
+ * that a record from another version's headers is told apart by it
+ * alone. */
+struct qrt_abi {
+    long abi_bytes;         /* sizeof(struct qrt_abi) */
+    long grid_deg_min;      /* QRT_GRID_DEG_MIN */
+    long max_points;        /* QRT_MAX_POINTS */
+    long max_waypoints;     /* QRT_MAX_WAYPOINTS (struct qrt_plan only) */
+    long goal_region_nodes; /* QRT_GOAL_REGION_NODES */
+    long lazy_index_after;  /* QRT_LAZY_INDEX_AFTER (behaviour only) */
+    /* the same settings can still be laid out differently by another
+     * compiler or ABI option (packing, -fshort-enums) */
+    long planner_bytes; /* sizeof(struct qrt_planner) */
+    long plan_bytes;    /* sizeof(struct qrt_plan) */
+    long enum_bytes;    /* sizeof(enum qrt_plan_status) */
+};
+
+/* The build of the code this is compiled into: the caller's in the
+ * caller's code, the library's in the library's. */
+static inline struct qrt_abi qrt_abi_here(void)
+{
+    struct qrt_abi abi;
+    abi.abi_bytes = (long)sizeof(struct qrt_abi);
+    abi.grid_deg_min = (long)QRT_GRID_DEG_MIN;
+    abi.max_points = (long)QRT_MAX_POINTS;
+    abi.max_waypoints = (long)QRT_MAX_WAYPOINTS;
+    abi.goal_region_nodes = (long)QRT_GOAL_REGION_NODES;
+    abi.lazy_index_after = (long)QRT_LAZY_INDEX_AFTER;
+    abi.planner_bytes = (long)sizeof(struct qrt_planner);
+    abi.plan_bytes = (long)sizeof(struct qrt_plan);
+    abi.enum_bytes = (long)sizeof(enum qrt_plan_status);
+    return abi;
+}
+
+/* Room for the longest sentence qrt_abi_check writes, with its zero; it
+ * writes no more than this. */
+#define QRT_ABI_MESSAGE_LEN 512
+
+/* QRT_OK when the build *caller describes is the library's; else QRT_E_ABI
+ * and, when msg is not NULL, one sentence in msg (at most msg_len bytes
+ * with the terminating zero; cut short, never overrun, when it does not
+ * fit) naming each setting that differs with the caller's and the
+ * library's value, e.g. "the caller was built with QRT_MAX_POINTS 1024,
+ * the library with 16384"; the sizes are named only when every setting
+ * agrees. msg is "" when the builds agree. No allocation, no I/O. */
+int qrt_abi_check(const struct qrt_abi *caller, char *msg, size_t msg_len);
+
+/* Why qrt_planner_init returned QRT_E_ABI, for the code this is compiled
+ * into: qrt_abi_check's sentence in msg, which it returns. */
+static inline const char *qrt_abi_message(char *msg, size_t msg_len)
+{
+    struct qrt_abi abi = qrt_abi_here();
+    (void)qrt_abi_check(&abi, msg, msg_len);
+    return msg;
+}
+
+/* QRT_OK; QRT_E_ABI, with *pl untouched, when *caller is not the library's
+ * build (see struct qrt_abi); QRT_E_INVALID for non-finite or negative
+ * margins, a bad arm or a bad grid; QRT_E_TOO_BIG when the lattice exceeds
+ * this build. Call it through qrt_planner_init. */
+int qrt_planner_init_abi(struct qrt_planner *pl,
+                         const struct qrt_params *params,
+                         const struct qrt_abi *caller);
+
+/* qrt_planner_init_abi with the build of the code this is compiled into:
+ * an inline function of the header, not of the library, so that the sizes
+ * and settings it passes are the caller's. */
+static inline int qrt_planner_init(struct qrt_planner *pl,
+                                   const struct qrt_params *params)
+{
+    struct qrt_abi abi = qrt_abi_here();
+    return qrt_planner_init_abi(pl, params, &abi);
+}
 
 /* Forget every point (the arm and lattice stay). */
 void qrt_planner_clear_points(struct qrt_planner *pl);

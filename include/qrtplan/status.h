@@ -13,7 +13,9 @@ enum qrt_err {
     QRT_OK = 0,
     QRT_E_INVALID = -1, /* NaN/Inf, wrong sizes, limits inverted, bad grid */
     QRT_E_LIMITS = -2,  /* a joint configuration outside the arm's limits */
-    QRT_E_TOO_BIG = -3  /* the scene's lattice is larger than this build */
+    QRT_E_TOO_BIG = -3, /* the scene's lattice is larger than this build */
+    QRT_E_ABI = -4      /* the caller was compiled with other settings than
+                           the library (qrt_abi_message says which) */
 };
 
 /* The outcome of a plan (design.md section 5). */

@@ -131,6 +131,10 @@ static int prepare(const char *path, struct scene *sc, int use_astar,
     sc->params.use_astar = use_astar;
     sc->params.simplify = simplify;
     rc = qrt_planner_init(&planner, &sc->params);
+    if (rc == QRT_E_ABI) { /* the core of another build linked in */
+        scene_free(sc);
+        return fail(NULL, qrt_abi_message(err, sizeof err));
+    }
     if (rc != QRT_OK) {
         scene_free(sc);
         return fail(name, rc == QRT_E_TOO_BIG

@@ -39,11 +39,19 @@ static double arm_reach(const struct qrt_arm *arm)
     return arm->link_m[0] + arm->link_m[1] + arm->link_m[2];
 }
 
-int qrt_planner_init(struct qrt_planner *pl, const struct qrt_params *params)
+int qrt_planner_init_abi(struct qrt_planner *pl,
+                         const struct qrt_params *params,
+                         const struct qrt_abi *caller)
 {
     const struct qrt_arm *arm = &params->arm;
     double rmax;
     int rc, k;
+    /* First, before *pl is touched: a caller compiled with other settings
+     * has a struct qrt_planner of another size and layout, and writing this
+     * library's into it would run past its end (planner.h, struct
+     * qrt_abi). */
+    if (qrt_abi_check(caller, NULL, 0) != QRT_OK)
+        return QRT_E_ABI;
     if (qrt_arm_validate(arm) != QRT_OK)
         return QRT_E_INVALID;
     if (!isfinite(params->margin_m) || params->margin_m < 0.0 ||

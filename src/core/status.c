@@ -30,6 +30,10 @@ const char *qrt_err_name(int err)
         return "joint configuration outside the arm's limits";
     case QRT_E_TOO_BIG:
         return "lattice larger than this build's tables";
+    case QRT_E_ABI:
+        return "caller compiled with other settings than the library "
+               "(QRT_GRID_DEG_MIN, QRT_MAX_POINTS, ...: qrt_abi_message "
+               "names them)";
     default:
         return "unknown error";
     }

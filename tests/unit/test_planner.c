@@ -1,6 +1,10 @@
 /* End-to-end plans checked by the independent reference arm: every
  * returned path, sampled at 0.05 degrees per joint, stays inside the limits
- * and collides with nothing; and each status comes when it should. */
+ * and collides with nothing; each status comes when it should; and a caller
+ * compiled with other settings than the library is refused. */
+#include <limits.h>
+#include <string.h>
+
 #include "check.h"
 #include "qrtplan/qrtplan.h"
 #include "ref_arm.h"
@@ -263,9 +267,83 @@ static void test_starts_near_obstacles(void)
           solved, exact_joins);
 }
 
+/* The ABI guard (planner.h, struct qrt_abi): a caller whose build differs
+ * from the library's is refused before its planner is touched, and told in
+ * one sentence which settings differ, with both values. */
+static void test_abi_guard(void)
+{
+    struct qrt_params prm;
+    struct qrt_abi abi = qrt_abi_here(), worst;
+    char why[QRT_ABI_MESSAGE_LEN], expect[QRT_ABI_MESSAGE_LEN], tiny[8],
+        lmin[24];
+    qrt_params_default(&prm);
+    snprintf(lmin, sizeof lmin, "%ld", LONG_MIN);
+    CHECK(qrt_abi_check(&abi, why, sizeof why) == QRT_OK && why[0] == '\0',
+          "same build: '%s'", why);
+    CHECK(qrt_abi_message(why, sizeof why)[0] == '\0', "message '%s'", why);
+
+    abi.grid_deg_min = QRT_GRID_DEG_MIN == 10 ? 5 : 10;
+    abi.max_points = QRT_MAX_POINTS == 1024 ? 2048 : 1024;
+    pl.mask_stale = 12345; /* init would set it to 1 */
+    CHECK(qrt_planner_init_abi(&pl, &prm, &abi) == QRT_E_ABI &&
+              pl.mask_stale == 12345,
+          "other settings refused, planner untouched");
+    CHECK(qrt_abi_check(&abi, NULL, 0) == QRT_E_ABI, "verdict alone");
+    CHECK(qrt_abi_check(&abi, why, sizeof why) == QRT_E_ABI, "settings");
+    snprintf(expect, sizeof expect,
+             "the caller was built with QRT_GRID_DEG_MIN %ld, the library "
+             "with %d; with QRT_MAX_POINTS %ld, the library with %ld",
+             abi.grid_deg_min, QRT_GRID_DEG_MIN, abi.max_points,
+             (long)QRT_MAX_POINTS);
+    CHECK(strcmp(why, expect) == 0, "message '%s'", why);
+    CHECK(qrt_abi_check(&abi, tiny, sizeof tiny) == QRT_E_ABI &&
+              strcmp(tiny, "the cal") == 0,
+          "cut short: '%s'", tiny);
+
+    /* QRT_MAX_WAYPOINTS sizes struct qrt_plan, not the planner */
+    abi = qrt_abi_here();
+    abi.max_waypoints = 64;
+    CHECK(qrt_planner_init_abi(&pl, &prm, &abi) == QRT_E_ABI, "waypoints");
+
+    abi = qrt_abi_here();
+    abi.planner_bytes += 8;
+    qrt_abi_check(&abi, why, sizeof why);
+    snprintf(expect, sizeof expect,
+             "the caller was built with sizeof(struct qrt_planner) %ld, the "
+             "library with %ld (the same settings: another compiler or ABI "
+             "option)",
+             abi.planner_bytes, (long)sizeof(struct qrt_planner));
+    CHECK(strcmp(why, expect) == 0, "message '%s'", why);
+
+    abi = qrt_abi_here();
+    abi.abi_bytes -= (long)sizeof(long);
+    CHECK(qrt_abi_check(&abi, why, sizeof why) == QRT_E_ABI &&
+              strstr(why, "another qrtplan version") != NULL,
+          "message '%s'", why);
+
+    /* the longest sentences fit QRT_ABI_MESSAGE_LEN whole */
+    worst = qrt_abi_here();
+    worst.grid_deg_min = worst.max_points = worst.max_waypoints =
+        worst.goal_region_nodes = worst.lazy_index_after = LONG_MIN;
+    qrt_abi_check(&worst, why, sizeof why);
+    CHECK(strlen(why) + 1 < sizeof why && strstr(why, lmin) &&
+              strstr(why, "QRT_LAZY_INDEX_AFTER"),
+          "longest settings sentence cut: '%s'", why);
+    worst = qrt_abi_here();
+    worst.planner_bytes = worst.plan_bytes = worst.enum_bytes = LONG_MIN;
+    qrt_abi_check(&worst, why, sizeof why);
+    CHECK(strlen(why) + 1 < sizeof why && strstr(why, "ABI option)"),
+          "longest sizes sentence cut: '%s'", why);
+
+    CHECK(strstr(qrt_err_name(QRT_E_ABI), "settings") != NULL, "err name");
+    CHECK(qrt_planner_init(&pl, &prm) == QRT_OK && pl.mask_stale == 1,
+          "the caller's own build is the library's");
+}
+
 int main(void)
 {
     test_seed(2024);
+    test_abi_guard();
     test_statuses();
     test_starts_near_obstacles();
     test_table4();
