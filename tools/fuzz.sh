@@ -9,7 +9,8 @@ mkdir -p "$out/corpus"
 cp tests/fuzz/corpus/* "$out/corpus/"
 clang -std=c99 -g -O1 -D_POSIX_C_SOURCE=200809L -fsanitize=fuzzer,address,undefined \
     -fno-sanitize-recover=all -Iinclude -Isrc/cli \
-    tests/fuzz/fuzz_scene.c src/cli/json.c src/cli/lzf.c src/cli/pcd.c src/cli/scene.c \
+    tests/fuzz/fuzz_scene.c src/cli/budget.c src/cli/json.c src/cli/lzf.c src/cli/pcd.c \
+    src/cli/scene.c \
     src/core/*.c -lm -o "$out/fuzz_scene"
 "$out/fuzz_scene" -max_total_time="$seconds" -max_len=65536 -timeout=10 \
     -print_final_stats=1 "$out/corpus" 2>"$out/fuzz.log" ||

@@ -1,6 +1,9 @@
 #define _POSIX_C_SOURCE 200809L
-/* Recursive-descent JSON reader; depth is bounded by JSON_MAX_DEPTH. */
+/* Recursive-descent JSON reader; depth is bounded by JSON_MAX_DEPTH. Its
+ * memory is counted against the command line's budget (budget.h). */
 #include "json.h"
+
+#include "budget.h"
 
 #include <errno.h>
 #include <math.h>
@@ -15,6 +18,7 @@ struct reader {
     char *err;
     size_t err_len;
     int failed;
+    const char *defer; /* the root member whose array is not built, or NULL */
 };
 
 static void fail(struct reader *r, const char *fmt, ...)
@@ -176,7 +180,7 @@ static char *parse_string(struct reader *r)
         fail(r, "unterminated string");
         return NULL;
     }
-    buf = malloc(r->pos - start + 1);
+    buf = budget_malloc(r->pos - start + 1);
     if (!buf) {
         fail(r, "out of memory");
         return NULL;
@@ -188,7 +192,7 @@ static char *parse_string(struct reader *r)
         if (c < 0x20) {
             r->pos--;
             fail(r, "control character in string");
-            free(buf);
+            budget_free(buf);
             return NULL;
         }
         if (c != '\\') {
@@ -222,7 +226,7 @@ static char *parse_string(struct reader *r)
                 (cp >= 0xD800 && cp < 0xE000)) {
                 if (!r->failed)
                     fail(r, "\\u escape not supported here (NUL or surrogate)");
-                free(buf);
+                budget_free(buf);
                 return NULL;
             }
             n += put_utf8(buf + n, cp);
@@ -230,7 +234,7 @@ static char *parse_string(struct reader *r)
         default:
             r->pos--;
             fail(r, "invalid escape '\\%c'", c);
-            free(buf);
+            budget_free(buf);
             return NULL;
         }
     }
@@ -245,7 +249,7 @@ static int push(struct reader *r, struct json **items, size_t *count,
 {
     if (*count == *cap) {
         size_t ncap = *cap ? *cap * 2 : 4;
-        struct json *grown = realloc(*items, ncap * sizeof **items);
+        struct json *grown = budget_realloc(*items, ncap * sizeof **items);
         if (!grown) {
             fail(r, "out of memory");
             return 0;
@@ -308,6 +312,40 @@ static int parse_array(struct reader *r, struct json *out, int depth)
     }
 }
 
+/* An array checked item by item, each freed as soon as it is read: its
+ * node gets the count and where the array starts (json_each_item reads it
+ * again). Memory: one item's tree. */
+static int skim_array(struct reader *r, struct json *out, int depth)
+{
+    out->type = JSON_ARRAY;
+    out->deferred = 1;
+    out->number = (double)r->pos; /* exact: offsets are far below 2^53 */
+    r->pos++;
+    skip_space(r);
+    if (peek(r) == ']') {
+        r->pos++;
+        return 1;
+    }
+    for (;;) {
+        struct json v;
+        int ok;
+        memset(&v, 0, sizeof v);
+        ok = parse_value(r, &v, depth + 1);
+        free_children(&v);
+        if (!ok)
+            return 0;
+        out->count++;
+        switch (next_item(r, ']', "array")) {
+        case 1:
+            continue;
+        case 0:
+            return 1;
+        default:
+            return 0;
+        }
+    }
+}
+
 static int parse_object(struct reader *r, struct json *out, int depth)
 {
     size_t cap = 0, key_cap = 0;
@@ -334,14 +372,14 @@ static int parse_object(struct reader *r, struct json *out, int depth)
         for (i = 0; i < out->count; i++)
             if (strcmp(out->keys[i], key) == 0) {
                 fail(r, "duplicate key \"%s\"", key);
-                free(key);
+                budget_free(key);
                 return 0;
             }
         if (out->count == key_cap) {
             size_t ncap = key_cap ? key_cap * 2 : 4;
-            char **grown = realloc(out->keys, ncap * sizeof *grown);
+            char **grown = budget_realloc(out->keys, ncap * sizeof *grown);
             if (!grown) {
-                free(key);
+                budget_free(key);
                 fail(r, "out of memory");
                 return 0;
             }
@@ -350,20 +388,28 @@ static int parse_object(struct reader *r, struct json *out, int depth)
         }
         skip_space(r);
         if (peek(r) != ':') {
-            free(key);
+            budget_free(key);
             fail(r, "expected ':' after key");
             return 0;
         }
         r->pos++;
         memset(&v, 0, sizeof v);
-        if (!parse_value(r, &v, depth + 1)) {
-            free(key);
+        skip_space(r);
+        if (depth == 0 && r->defer && peek(r) == '[' &&
+            strcmp(key, r->defer) == 0) {
+            if (!skim_array(r, &v, depth + 1)) {
+                budget_free(key);
+                free_children(&v);
+                return 0;
+            }
+        } else if (!parse_value(r, &v, depth + 1)) {
+            budget_free(key);
             free_children(&v);
             return 0;
         }
         out->keys[out->count] = key;
         if (!push(r, &out->items, &out->count, &cap, &v)) {
-            free(key);
+            budget_free(key);
             free_children(&v);
             return 0;
         }
@@ -419,15 +465,15 @@ static int parse_value(struct reader *r, struct json *out, int depth)
 
 static void free_children(struct json *j)
 {
-    size_t i;
-    for (i = 0; i < j->count; i++) {
+    size_t i, n = j->items ? j->count : 0; /* a deferred array has none */
+    for (i = 0; i < n; i++) {
         free_children(&j->items[i]);
         if (j->keys)
-            free(j->keys[i]);
+            budget_free(j->keys[i]);
     }
-    free(j->items);
-    free(j->keys);
-    free(j->string);
+    budget_free(j->items);
+    budget_free(j->keys);
+    budget_free(j->string);
 }
 
 void json_free(struct json *j)
@@ -435,23 +481,26 @@ void json_free(struct json *j)
     if (!j)
         return;
     free_children(j);
-    free(j);
+    budget_free(j);
 }
 
-struct json *json_parse(const char *text, size_t len, char *err, size_t err_len)
+static struct json *parse_document(const char *text, size_t len,
+                                   const char *defer, char *err, size_t err_len)
 {
     struct reader r;
-    struct json *root = calloc(1, sizeof *root);
+    struct json *root = budget_malloc(sizeof *root);
     r.s = text;
     r.len = len;
     r.pos = 0;
     r.err = err;
     r.err_len = err_len;
     r.failed = 0;
+    r.defer = defer;
     if (!root) {
         snprintf(err, err_len, "out of memory");
         return NULL;
     }
+    memset(root, 0, sizeof *root);
     if (parse_value(&r, root, 0)) {
         skip_space(&r);
         if (r.pos < r.len)
@@ -462,6 +511,54 @@ struct json *json_parse(const char *text, size_t len, char *err, size_t err_len)
         return NULL;
     }
     return root;
+}
+
+struct json *json_parse(const char *text, size_t len, char *err, size_t err_len)
+{
+    return parse_document(text, len, NULL, err, err_len);
+}
+
+struct json *json_parse_deferring(const char *text, size_t len,
+                                  const char *defer, char *err, size_t err_len)
+{
+    return parse_document(text, len, defer, err, err_len);
+}
+
+int json_each_item(const char *text, size_t len, const struct json *array,
+                   int (*fn)(void *ctx, size_t i, const struct json *item),
+                   void *ctx, char *err, size_t err_len)
+{
+    struct reader r;
+    size_t i;
+    if (!array->deferred) {
+        for (i = 0; i < array->count; i++)
+            if (fn(ctx, i, &array->items[i]))
+                return -1;
+        return 0;
+    }
+    r.s = text;
+    r.len = len;
+    r.pos = (size_t)array->number + 1;
+    r.err = err;
+    r.err_len = err_len;
+    r.failed = 0;
+    r.defer = NULL;
+    for (i = 0; i < array->count; i++) {
+        struct json v;
+        int stop;
+        memset(&v, 0, sizeof v);
+        if (i > 0 && next_item(&r, ']', "array") != 1)
+            return -1; /* the text is not what was skimmed */
+        if (!parse_value(&r, &v, 2)) {
+            free_children(&v);
+            return -1;
+        }
+        stop = fn(ctx, i, &v);
+        free_children(&v);
+        if (stop)
+            return -1;
+    }
+    return 0;
 }
 
 const struct json *json_get(const struct json *obj, const char *key)

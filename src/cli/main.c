@@ -2,11 +2,13 @@
 #define _XOPEN_SOURCE 700
 #include <errno.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
+#include "budget.h"
 #include "gen.h"
 #include "plan_json.h"
 #include "qrtplan/qrtplan.h"
@@ -15,8 +17,8 @@
 static const char usage[] =
     "usage: qrtplan plan SCENE.json [-o PLAN.json] [--dijkstra] "
     "[--no-simplify]\n"
-    "                    [--as-read]\n"
-    "       qrtplan mask SCENE.json [-o MASK.json]\n"
+    "                    [--as-read] [--max-memory BYTES]\n"
+    "       qrtplan mask SCENE.json [-o MASK.json] [--max-memory BYTES]\n"
     "       qrtplan gen [--spheres N] [--points K] [--radius R] [--distance "
     "D]\n"
     "                   [--height Z] [--phase DEG] [--start A,S,E] [--goal "
@@ -42,6 +44,18 @@ static const char help[] =
     "                       reads them (qrt_planner_plan_now): the same plan,\n"
     "                       sooner; stats then say cells_blocked -1 and put\n"
     "                       the whole time under search\n"
+    "       --max-memory BYTES  the most memory it may hold (default 1G;\n"
+    "                       bytes, or with K, M or G, powers of 1024; at\n"
+    "                       least 16M): the planner's ~4 MB state and 8 MiB\n"
+    "                       for the program, then every buffer it allocates\n"
+    "                       to read the scene, counted before it is made:\n"
+    "                       the JSON text (at most 1 GiB), its tree without\n"
+    "                       the points array (~50 B a value), one point at\n"
+    "                       a time, and ~140 KiB to stream a PCD file into\n"
+    "                       the planner's fixed table, however many points\n"
+    "                       it holds or claims. A scene that needs more is\n"
+    "                       refused (exit 2). points_file must be a regular\n"
+    "                       file (a FIFO or a device is refused at once).\n"
     "       stats.time_us is this run's wall clock; in a fresh process its\n"
     "       total is mostly the first touch of the planner's ~4 MB state\n"
     "       (compare builds with tools/bench.sh, not with it).\n"
@@ -50,6 +64,7 @@ static const char help[] =
     "       writes to standard output, in every command.\n"
     "mask   Write the scene's blocked lattice nodes as JSON (index =\n"
     "       (ia*ns + is)*ne + ie; node joints = lo_deg + i*grid_deg).\n"
+    "       --max-memory as for plan.\n"
     "gen    Write a scene of the paper's obstacle family (its Eq. 13, Fig. "
     "17):\n"
     "       N spheres (default 1) of radius R (0.1 m), centres on a circle of\n"
@@ -117,40 +132,111 @@ static int close_output(FILE *f, const char *path)
 /* The planner state is 4 MiB: static, as on a board. */
 static struct qrt_planner planner;
 
-/* Scene -> points in the planner and (build_mask) the mask. Returns 0 or
- * an exit status. */
+/* The memory budget: --max-memory, or this. Besides the planner's state
+ * and what the readers allocate (counted), the program itself: its code,
+ * the C library, stacks and stdio, well under 8 MiB (a plan's whole peak
+ * resident set is 3-5 MB with a small scene, the planner's state
+ * included). */
+#define DEFAULT_MAX_MEMORY ((uint64_t)1 << 30)
+#define MIN_MAX_MEMORY ((uint64_t)16 << 20)
+#define PROGRAM_BYTES ((uint64_t)8 << 20)
+
+/* --max-memory's value: 0, or an exit status. */
+static int parse_max_memory(const char *arg, uint64_t *bytes)
+{
+    char min[32];
+    if (budget_parse_bytes(arg, bytes)) {
+        fprintf(stderr,
+                "qrtplan: --max-memory: bad value '%.40s' (bytes, or with "
+                "K, M or G: 512M, 2G)\n",
+                arg);
+        return 2;
+    }
+    if (*bytes < MIN_MAX_MEMORY) {
+        budget_format(MIN_MAX_MEMORY, min, sizeof min);
+        fprintf(stderr,
+                "qrtplan: --max-memory: at least %s (the planner's state "
+                "and the program)\n",
+                min);
+        return 2;
+    }
+    return 0;
+}
+
+static int fail_budget(const char *name)
+{
+    char limit[32];
+    budget_format(budget_limit(), limit, sizeof limit);
+    fprintf(stderr,
+            "qrtplan: %s: needs more than the memory budget of %s "
+            "(--max-memory)\n",
+            name, limit);
+    return 2;
+}
+
+/* The scene's points go straight into the planner as they are read. */
+struct intake {
+    int use_astar, simplify;
+    int init_rc, add_rc;
+    long add_us;
+};
+
+static void intake_begin(void *ctx, const struct qrt_params *params)
+{
+    struct intake *in = (struct intake *)ctx;
+    struct qrt_params p = *params;
+    p.use_astar = in->use_astar;
+    p.simplify = in->simplify;
+    in->init_rc = qrt_planner_init(&planner, &p);
+}
+
+static void intake_add(void *ctx, const double *xyz, long n)
+{
+    struct intake *in = (struct intake *)ctx;
+    long t0;
+    if (in->init_rc != QRT_OK || in->add_rc != QRT_OK)
+        return;
+    t0 = now_us();
+    in->add_rc = qrt_planner_add_points(&planner, xyz, n);
+    in->add_us += now_us() - t0;
+}
+
+/* Scene -> points in the planner and (build_mask) the mask, within the
+ * memory budget. Returns 0 or an exit status. */
 static int prepare(const char *path, struct scene *sc, int use_astar,
-                   int simplify, int build_mask, long *convert_us)
+                   int simplify, int build_mask, uint64_t max_memory,
+                   long *convert_us)
 {
     char err[512];
     long t0;
-    int rc;
     const char *name = scene_name(path);
-    if (scene_load(path, sc, err, sizeof err))
-        return fail(name, err);
-    sc->params.use_astar = use_astar;
-    sc->params.simplify = simplify;
-    rc = qrt_planner_init(&planner, &sc->params);
-    if (rc == QRT_E_ABI) { /* the core of another build linked in */
-        scene_free(sc);
+    struct intake in;
+    struct scene_sink sink;
+    budget_init(max_memory, sizeof planner + PROGRAM_BYTES);
+    in.use_astar = use_astar;
+    in.simplify = simplify;
+    in.init_rc = QRT_E_INVALID;
+    in.add_rc = QRT_OK;
+    in.add_us = 0;
+    sink.begin = intake_begin;
+    sink.add = intake_add;
+    sink.ctx = &in;
+    if (scene_load(path, &sink, sc, err, sizeof err))
+        return budget_refused() ? fail_budget(name) : fail(name, err);
+    if (in.init_rc == QRT_E_ABI) /* the core of another build linked in */
         return fail(NULL, qrt_abi_message(err, sizeof err));
-    }
-    if (rc != QRT_OK) {
-        scene_free(sc);
-        return fail(name, rc == QRT_E_TOO_BIG
+    if (in.init_rc != QRT_OK)
+        return fail(name, in.init_rc == QRT_E_TOO_BIG
                               ? "lattice larger than this build's tables "
                                 "(coarser grid_deg or narrower limits)"
                               : "invalid arm, margins or grid_deg (alpha "
                                 "wraps only with a grid that divides 360)");
-    }
-    t0 = now_us();
-    if (qrt_planner_add_points(&planner, sc->points, sc->n_points) != QRT_OK) {
-        scene_free(sc);
+    if (in.add_rc != QRT_OK)
         return fail(name, "obstacle points must be finite");
-    }
+    t0 = now_us();
     if (build_mask)
         qrt_planner_build_mask(&planner);
-    *convert_us = build_mask ? now_us() - t0 : 0;
+    *convert_us = build_mask ? in.add_us + now_us() - t0 : 0;
     return 0;
 }
 
@@ -161,12 +247,16 @@ static int cmd_plan(int argc, char **argv)
     struct qrt_plan plan;
     struct stage_times t;
     int use_astar = 1, simplify = 1, as_read = 0, i, rc;
+    uint64_t max_memory = DEFAULT_MAX_MEMORY;
     long t_start = now_us(), t1;
     FILE *out;
     for (i = 0; i < argc; i++) {
         if (strcmp(argv[i], "-o") == 0 && i + 1 < argc)
             out_path = output_path(argv[++i]);
-        else if (strcmp(argv[i], "--dijkstra") == 0)
+        else if (strcmp(argv[i], "--max-memory") == 0 && i + 1 < argc) {
+            if ((rc = parse_max_memory(argv[++i], &max_memory)) != 0)
+                return rc;
+        } else if (strcmp(argv[i], "--dijkstra") == 0)
             use_astar = 0;
         else if (strcmp(argv[i], "--no-simplify") == 0)
             simplify = 0;
@@ -179,14 +269,14 @@ static int cmd_plan(int argc, char **argv)
     }
     if (!scene_path)
         return fail(NULL, "plan: no scene file given (see --help)");
-    rc = prepare(scene_path, &sc, use_astar, simplify, !as_read, &t.convert_us);
+    rc = prepare(scene_path, &sc, use_astar, simplify, !as_read, max_memory,
+                 &t.convert_us);
     if (rc)
         return rc;
     t1 = now_us();
     rc = as_read ? qrt_planner_plan_now(&planner, &sc.start, &sc.goal, &plan)
                  : qrt_planner_plan(&planner, &sc.start, &sc.goal, &plan);
     t.search_us = now_us() - t1;
-    scene_free(&sc);
     if (rc != QRT_OK)
         return fail(scene_name(scene_path), qrt_err_name(rc));
     out = open_output(out_path);
@@ -203,21 +293,24 @@ static int cmd_mask(int argc, char **argv)
     struct scene sc;
     long convert_us;
     int i, rc;
+    uint64_t max_memory = DEFAULT_MAX_MEMORY;
     FILE *out;
     for (i = 0; i < argc; i++) {
         if (strcmp(argv[i], "-o") == 0 && i + 1 < argc)
             out_path = output_path(argv[++i]);
-        else if (is_scene_arg(argv[i]) && !scene_path)
+        else if (strcmp(argv[i], "--max-memory") == 0 && i + 1 < argc) {
+            if ((rc = parse_max_memory(argv[++i], &max_memory)) != 0)
+                return rc;
+        } else if (is_scene_arg(argv[i]) && !scene_path)
             scene_path = argv[i];
         else
             return fail(NULL, "mask: unexpected argument (see --help)");
     }
     if (!scene_path)
         return fail(NULL, "mask: no scene file given (see --help)");
-    rc = prepare(scene_path, &sc, 1, 1, 1, &convert_us);
+    rc = prepare(scene_path, &sc, 1, 1, 1, max_memory, &convert_us);
     if (rc)
         return rc;
-    scene_free(&sc);
     out = open_output(out_path);
     if (!out)
         return fail(out_path, "cannot open for writing");

@@ -1,9 +1,18 @@
 #define _POSIX_C_SOURCE 200809L
 /* PCD v0.7 reader: header lines, then ascii rows, packed binary rows, or
  * binary_compressed: the rows' bytes field by field (every point's x, then
- * every point's y, ...) compressed with LZF. */
+ * every point's y, ...) compressed with LZF.
+ *
+ * The file is read a block at a time and the points go to the sink in
+ * chunks, so the reader holds the same few buffers (struct pcd_buffers,
+ * about 140 KiB) whatever the file holds or its header claims. For
+ * binary_compressed, three LZF decoders read the one stream side by side,
+ * each from its start, each skipping to the column of x, y or z: a point's
+ * three coordinates come out together without the columns ever being held.
+ * Every size is computed in 64 bits and checked before it is used. */
 #include "pcd.h"
 
+#include "budget.h"
 #include "lzf.h"
 
 #include <errno.h>
@@ -12,10 +21,18 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/types.h>
+#include <unistd.h>
 
 #define PCD_MAX_FIELDS 32
-/* binary_compressed data expands to no more than a file may hold */
-#define PCD_MAX_UNCOMPRESSED_BYTES (1ul << 30)
+/* WIDTH, HEIGHT and POINTS each, and WIDTH x HEIGHT */
+#define PCD_MAX_POINTS 2000000000L
+/* binary_compressed data expands to no more than a file may hold: this
+ * bounds the work of decoding, not the memory (the data is streamed) */
+#define PCD_MAX_UNCOMPRESSED_BYTES ((uint64_t)1 << 30)
+/* bytes read from the file at a time; no row is longer (32 fields of 64
+ * values of 8 bytes) */
+#define PCD_BLOCK 16384
 
 enum pcd_data { PCD_ASCII, PCD_BINARY, PCD_BINARY_COMPRESSED };
 
@@ -29,20 +46,119 @@ struct pcd_header {
     int seen_fields, seen_size, seen_type, seen_count;
 };
 
-/* Copy the next line (without its newline) into line; returns 0 at end. */
-static int next_line(const char *buf, size_t len, size_t *pos, char *line,
-                     size_t cap)
+/* All the reader holds, allocated once (budget_malloc). */
+struct pcd_buffers {
+    unsigned char block[PCD_BLOCK]; /* header, ascii text, binary rows */
+    unsigned char lzf_in[3][PCD_BLOCK];
+    unsigned char lzf_window[3][LZF_WINDOW];
+    unsigned char column[3][PCD_CHUNK_POINTS * 8]; /* a chunk of x, y, z */
+    double xyz[3 * PCD_CHUNK_POINTS];
+};
+
+/* a * b, or -1 if it passes 64 bits */
+static int mul_u64(uint64_t a, uint64_t b, uint64_t *out)
+{
+    if (a != 0 && b > UINT64_MAX / a)
+        return -1;
+    *out = a * b;
+    return 0;
+}
+
+/* The file, and the first thing that went wrong reading it. */
+struct pcd_io {
+    const struct pcd_source *src;
+    int failed; /* 0, an errno, or -1: the file ended before its size */
+};
+
+/* n bytes at off (off + n within the source's size) into buf: 0, or -1
+ * with io->failed set. */
+static int io_read(struct pcd_io *io, uint64_t off, unsigned char *buf,
+                   size_t n)
+{
+    const struct pcd_source *s = io->src;
+    size_t got = 0;
+    if (io->failed)
+        return -1;
+    if (!s->mem) {
+        while (got < n) {
+            ssize_t r = pread(s->fd, buf + got, n - got, (off_t)(off + got));
+            if (r < 0 && errno == EINTR)
+                continue;
+            if (r <= 0) {
+                io->failed = r < 0 ? errno : -1;
+                return -1;
+            }
+            got += (size_t)r;
+        }
+    } else if (n > 0) {
+        memcpy(buf, s->mem + off, n);
+    }
+    return 0;
+}
+
+/* Bytes [next, end) of the file, a block at a time. */
+struct reader {
+    struct pcd_io *io;
+    unsigned char *buf;
+    uint64_t next, end; /* file offset of the byte after buf's */
+    size_t len, i;      /* buf holds len bytes, i the next unread */
+};
+
+static void reader_start(struct reader *r, struct pcd_io *io,
+                         unsigned char *buf, uint64_t from, uint64_t end)
+{
+    r->io = io;
+    r->buf = buf;
+    r->next = from;
+    r->end = end;
+    r->len = r->i = 0;
+}
+
+/* The next byte without taking it, or -1 at the end (or a read error). */
+static int peek_byte(struct reader *r)
+{
+    if (r->i == r->len) {
+        size_t n;
+        if (r->next >= r->end)
+            return -1;
+        n = r->end - r->next < PCD_BLOCK ? (size_t)(r->end - r->next)
+                                         : PCD_BLOCK;
+        if (io_read(r->io, r->next, r->buf, n))
+            return -1;
+        r->next += n;
+        r->len = n;
+        r->i = 0;
+    }
+    return r->buf[r->i];
+}
+
+static int get_byte(struct reader *r)
+{
+    int c = peek_byte(r);
+    if (c >= 0)
+        r->i++;
+    return c;
+}
+
+/* File offset of the next byte. */
+static uint64_t reader_offset(const struct reader *r)
+{
+    return r->next - (r->len - r->i);
+}
+
+/* Copy the next line (without its newline) into line, as much of it as
+ * fits; returns 0 at end. */
+static int next_line(struct reader *r, char *line, size_t cap)
 {
     size_t n = 0;
-    if (*pos >= len)
+    int c = get_byte(r);
+    if (c < 0)
         return 0;
-    while (*pos < len && buf[*pos] != '\n') {
+    while (c >= 0 && c != '\n') {
         if (n + 1 < cap)
-            line[n++] = buf[*pos];
-        (*pos)++;
+            line[n++] = (char)c;
+        c = get_byte(r);
     }
-    if (*pos < len)
-        (*pos)++;
     if (n > 0 && line[n - 1] == '\r')
         n--;
     line[n] = '\0';
@@ -64,14 +180,14 @@ static int parse_ints(char *rest, int *out, int max)
     return tok ? -1 : n;
 }
 
-static int parse_header(const char *buf, size_t len, size_t *pos,
-                        struct pcd_header *h, char *err, size_t err_len)
+static int parse_header(struct reader *rd, struct pcd_header *h, char *err,
+                        size_t err_len)
 {
     char line[1024];
     memset(h, 0, sizeof *h);
     h->height = 1;
     h->points = -1;
-    while (next_line(buf, len, pos, line, sizeof line)) {
+    while (next_line(rd, line, sizeof line)) {
         char key[32], *rest;
         int i, n;
         if (line[0] == '#' || line[0] == '\0')
@@ -130,7 +246,7 @@ static int parse_header(const char *buf, size_t len, size_t *pos,
             v = strtol(rest, &end, 10);
             while (*end == ' ' || *end == '\t')
                 end++;
-            if (errno || *end || v < 0 || v > 2000000000L) {
+            if (errno || *end || v < 0 || v > PCD_MAX_POINTS) {
                 snprintf(err, err_len, "bad %s value", key);
                 return -1;
             }
@@ -248,128 +364,203 @@ static double load_coordinate(const void *at, int is_double)
     }
 }
 
-static int read_binary(const char *data, size_t avail,
-                       const struct xyz_layout *L, long n, double *xyz,
-                       char *err, size_t err_len)
+/* Points on their way to the sink, a chunk at a time. */
+struct emitter {
+    pcd_sink sink;
+    void *ctx;
+    double *xyz; /* PCD_CHUNK_POINTS points */
+    long n;
+};
+
+static void emit_flush(struct emitter *e)
 {
-    long i;
-    int k;
-    if (L->row_bytes == 0 || avail / L->row_bytes < (size_t)n) {
+    if (e->n > 0 && e->sink)
+        e->sink(e->ctx, e->xyz, e->n);
+    e->n = 0;
+}
+
+/* Check point i and pass it on: 0, or -1 with a message. */
+static int emit(struct emitter *e, const double p[3], long i, char *err,
+                size_t err_len)
+{
+    if (check_point(p, i, err, err_len))
+        return -1;
+    memcpy(e->xyz + 3 * e->n, p, 3 * sizeof *p);
+    if (++e->n == PCD_CHUNK_POINTS)
+        emit_flush(e);
+    return 0;
+}
+
+static int read_binary(struct pcd_io *io, uint64_t at,
+                       const struct xyz_layout *L, long n, struct emitter *e,
+                       unsigned char *block, char *err, size_t err_len)
+{
+    uint64_t need = UINT64_MAX, avail = io->src->len - at;
+    long i, rows = (long)(PCD_BLOCK / L->row_bytes);
+    if (rows > PCD_CHUNK_POINTS)
+        rows = PCD_CHUNK_POINTS;
+    if (mul_u64(L->row_bytes, (uint64_t)n, &need) || need > avail) {
         snprintf(err, err_len,
-                 "binary data truncated: %ld points need %zu "
-                 "bytes, file has %zu",
-                 n, (size_t)n * L->row_bytes, avail);
+                 "binary data truncated: %ld points need %llu "
+                 "bytes, file has %llu",
+                 n, (unsigned long long)need, (unsigned long long)avail);
         return -1;
     }
-    for (i = 0; i < n; i++) {
-        const char *row = data + (size_t)i * L->row_bytes;
-        for (k = 0; k < 3; k++)
-            xyz[3 * i + k] =
-                load_coordinate(row + L->offset[k], L->is_double[k]);
-        if (check_point(xyz + 3 * i, i, err, err_len))
+    for (i = 0; i < n; i += rows) {
+        long m = n - i < rows ? n - i : rows, j;
+        if (io_read(io, at + (uint64_t)i * L->row_bytes, block,
+                    (size_t)m * L->row_bytes))
             return -1;
+        for (j = 0; j < m; j++) {
+            const unsigned char *row = block + (size_t)j * L->row_bytes;
+            double p[3];
+            int k;
+            for (k = 0; k < 3; k++)
+                p[k] = load_coordinate(row + L->offset[k], L->is_double[k]);
+            if (emit(e, p, i + j, err, err_len))
+                return -1;
+        }
     }
     return 0;
 }
 
-static uint32_t le32(const char *p)
+static uint32_t le32(const unsigned char *u)
 {
-    const unsigned char *u = (const unsigned char *)p;
     return (uint32_t)u[0] | (uint32_t)u[1] << 8 | (uint32_t)u[2] << 16 |
            (uint32_t)u[3] << 24;
 }
 
-/* Two little-endian uint32, the compressed and the uncompressed size, then
- * the LZF stream. Checked before anything is allocated: a few bytes must
- * not make the reader ask for gigabytes. */
-static int check_compressed_sizes(const char *data, size_t avail,
-                                  const struct xyz_layout *L, long n, char *err,
-                                  size_t err_len)
+/* A decoder's input: the stream's bytes in order from the file. */
+struct lzf_source {
+    struct pcd_io *io;
+    uint64_t next;
+};
+
+static int lzf_from_file(void *ctx, unsigned char *buf, size_t n)
 {
-    size_t want, packed, stated;
-    if ((size_t)n > PCD_MAX_UNCOMPRESSED_BYTES / L->row_bytes) {
+    struct lzf_source *in = (struct lzf_source *)ctx;
+    if (io_read(in->io, in->next, buf, n))
+        return -1;
+    in->next += n;
+    return 0;
+}
+
+static int lzf_failed(enum lzf_result r, char *err, size_t err_len)
+{
+    snprintf(err, err_len, "binary_compressed data: %s", lzf_result_text(r));
+    return -1;
+}
+
+/* Two little-endian uint32, the compressed and the uncompressed size, then
+ * the LZF stream of the rows stored field by field: field f's values start
+ * at n times f's offset in a row. The sizes are checked before anything is
+ * decoded: a few bytes must not make the reader work through gigabytes. */
+static int read_compressed(struct pcd_io *io, uint64_t at,
+                           const struct xyz_layout *L, long n,
+                           struct emitter *e, struct pcd_buffers *b, char *err,
+                           size_t err_len)
+{
+    uint64_t avail = io->src->len - at, want, packed, stated;
+    unsigned char sizes[8];
+    struct lzf_stream dec[3];
+    struct lzf_source src[3];
+    enum lzf_result r;
+    int k, last = 0;
+    long i;
+    if ((uint64_t)n > PCD_MAX_UNCOMPRESSED_BYTES / L->row_bytes) {
         snprintf(err, err_len,
                  "binary_compressed data: %ld points of %zu bytes are more "
                  "than 1 GiB",
                  n, L->row_bytes);
         return -1;
     }
-    want = L->row_bytes * (size_t)n;
+    want = (uint64_t)L->row_bytes * (uint64_t)n; /* at most 1 GiB */
     if (avail < 8) {
         snprintf(err, err_len, "binary_compressed data truncated: no sizes");
         return -1;
     }
-    packed = le32(data);
-    stated = le32(data + 4);
+    if (io_read(io, at, sizes, sizeof sizes))
+        return -1;
+    packed = le32(sizes);
+    stated = le32(sizes + 4);
     if (stated != want) {
         snprintf(err, err_len,
-                 "binary_compressed data says %zu bytes uncompressed, but "
-                 "%ld points of %zu bytes are %zu",
-                 stated, n, L->row_bytes, want);
+                 "binary_compressed data says %llu bytes uncompressed, but "
+                 "%ld points of %zu bytes are %llu",
+                 (unsigned long long)stated, n, L->row_bytes,
+                 (unsigned long long)want);
         return -1;
     }
     if (packed > avail - 8) {
         snprintf(err, err_len,
-                 "binary_compressed data truncated: %zu bytes stated, file "
-                 "has %zu",
-                 packed, avail - 8);
+                 "binary_compressed data truncated: %llu bytes stated, file "
+                 "has %llu",
+                 (unsigned long long)packed, (unsigned long long)(avail - 8));
         return -1;
     }
     if (want / LZF_MAX_EXPANSION > packed) {
         snprintf(err, err_len,
-                 "binary_compressed data: %zu bytes cannot expand to %zu "
+                 "binary_compressed data: %llu bytes cannot expand to %llu "
                  "(LZF expands at most %d times)",
-                 packed, want, LZF_MAX_EXPANSION);
+                 (unsigned long long)packed, (unsigned long long)want,
+                 LZF_MAX_EXPANSION);
         return -1;
     }
-    return 0;
-}
-
-/* The rows stored field by field (every point's x, then every point's y,
- * ...): field f's values start at n times f's offset in a row. Sizes as
- * check_compressed_sizes passed them. */
-static int read_compressed(const char *data, const struct xyz_layout *L, long n,
-                           double *xyz, char *err, size_t err_len)
-{
-    size_t want = L->row_bytes * (size_t)n, packed = le32(data);
-    unsigned char *raw;
-    enum lzf_result r;
-    long i;
-    int k;
-    raw = malloc(want);
-    if (!raw) {
-        snprintf(err, err_len, "out of memory for %zu bytes", want);
-        return -1;
-    }
-    r = lzf_decode((const unsigned char *)data + 8, packed, raw, want);
-    if (r != LZF_OK) {
-        snprintf(err, err_len, "binary_compressed data: %s",
-                 lzf_result_text(r));
-        free(raw);
-        return -1;
-    }
-    for (i = 0; i < n; i++) {
-        for (k = 0; k < 3; k++) {
-            size_t width = L->is_double[k] ? 8 : 4;
-            xyz[3 * i + k] = load_coordinate(raw + L->offset[k] * (size_t)n +
-                                                 (size_t)i * width,
-                                             L->is_double[k]);
-        }
-        if (check_point(xyz + 3 * i, i, err, err_len)) {
-            free(raw);
+    for (k = 0; k < 3; k++) {
+        uint64_t column;
+        src[k].io = io;
+        src[k].next = at + 8;
+        lzf_stream_init(&dec[k], packed, want, b->lzf_in[k], PCD_BLOCK,
+                        b->lzf_window[k], lzf_from_file, &src[k]);
+        if (L->offset[k] > L->offset[last])
+            last = k;
+        if (mul_u64(L->offset[k], (uint64_t)n, &column) || column > want) {
+            snprintf(err, err_len, "binary_compressed data: bad layout");
             return -1;
         }
+        r = lzf_stream_read(&dec[k], NULL, column);
+        if (r != LZF_OK)
+            return lzf_failed(r, err, err_len);
     }
-    free(raw);
-    return 0;
+    for (i = 0; i < n; i += PCD_CHUNK_POINTS) {
+        long m = n - i < PCD_CHUNK_POINTS ? n - i : PCD_CHUNK_POINTS, j;
+        for (k = 0; k < 3; k++) {
+            r = lzf_stream_read(&dec[k], b->column[k],
+                                (uint64_t)m * (L->is_double[k] ? 8 : 4));
+            if (r != LZF_OK)
+                return lzf_failed(r, err, err_len);
+        }
+        for (j = 0; j < m; j++) {
+            double p[3];
+            for (k = 0; k < 3; k++)
+                p[k] = load_coordinate(
+                    b->column[k] + (size_t)j * (L->is_double[k] ? 8 : 4),
+                    L->is_double[k]);
+            if (emit(e, p, i + j, err, err_len)) {
+                /* a fault in the stream comes first, wherever it is, as
+                 * when the whole stream was decoded before any point */
+                r = lzf_stream_finish(&dec[last]);
+                return r != LZF_OK ? lzf_failed(r, err, err_len) : -1;
+            }
+        }
+    }
+    /* the decoder furthest on checks the rest of the stream */
+    r = lzf_stream_finish(&dec[last]);
+    return r != LZF_OK ? lzf_failed(r, err, err_len) : 0;
 }
 
-static int read_ascii(const char *buf, size_t len, size_t pos,
-                      const struct xyz_layout *L, long n, double *xyz,
+static int read_ascii(struct reader *rd, uint64_t avail,
+                      const struct xyz_layout *L, long n, struct emitter *e,
                       char *err, size_t err_len)
 {
     long i;
+    int c;
+    if ((uint64_t)n > avail) { /* a byte a point */
+        snprintf(err, err_len, "ascii data truncated: POINTS %ld", n);
+        return -1;
+    }
     for (i = 0; i < n; i++) {
+        double p[3] = {0, 0, 0};
         size_t v;
         int k;
         /* one row: row_values numbers, whitespace separated */
@@ -378,12 +569,15 @@ static int read_ascii(const char *buf, size_t len, size_t pos,
             size_t t = 0;
             double d;
             char *end;
-            while (pos < len && (buf[pos] == ' ' || buf[pos] == '\t' ||
-                                 buf[pos] == '\r' || buf[pos] == '\n'))
-                pos++;
-            while (pos < len && !strchr(" \t\r\n", buf[pos]) &&
-                   t + 1 < sizeof tmp)
-                tmp[t++] = buf[pos++];
+            while ((c = peek_byte(rd)) == ' ' || c == '\t' || c == '\r' ||
+                   c == '\n')
+                rd->i++;
+            /* a NUL ends a number too; a longer one is cut into pieces */
+            while ((c = peek_byte(rd)) > 0 && !strchr(" \t\r\n", c) &&
+                   t + 1 < sizeof tmp) {
+                tmp[t++] = (char)c;
+                rd->i++;
+            }
             tmp[t] = '\0';
             if (t == 0) {
                 snprintf(err, err_len,
@@ -399,36 +593,44 @@ static int read_ascii(const char *buf, size_t len, size_t pos,
             }
             for (k = 0; k < 3; k++)
                 if (L->value_index[k] == v)
-                    xyz[3 * i + k] = d;
+                    p[k] = d;
         }
-        if (check_point(xyz + 3 * i, i, err, err_len))
+        if (emit(e, p, i, err, err_len))
             return -1;
     }
-    while (pos < len && strchr(" \t\r\n", buf[pos]))
-        pos++;
-    if (pos < len) {
+    while ((c = peek_byte(rd)) >= 0 && strchr(" \t\r\n", c))
+        rd->i++;
+    if (c >= 0) {
         snprintf(err, err_len, "more data than POINTS says");
         return -1;
     }
     return 0;
 }
 
-int pcd_parse(const char *buf, size_t len, double **xyz_out, long *n_out,
-              char *err, size_t err_len)
+static int read_cloud(struct pcd_io *io, struct pcd_buffers *b,
+                      struct emitter *e, long *n_out, char *err, size_t err_len)
 {
     struct pcd_header h;
     struct xyz_layout L = {{0}, {0}, 0, 0, {0}};
-    size_t pos = 0;
-    double *xyz;
+    struct reader rd;
+    uint64_t at, wh;
     long n;
-    *xyz_out = NULL;
-    *n_out = 0;
-    if (parse_header(buf, len, &pos, &h, err, err_len) ||
-        layout_of(&h, &L, err, err_len))
+    int rc;
+    reader_start(&rd, io, b->block, 0, io->src->len);
+    if (parse_header(&rd, &h, err, err_len) || layout_of(&h, &L, err, err_len))
         return -1;
-    if (h.points < 0)
-        h.points = h.width * h.height;
-    if (h.width * h.height != h.points) {
+    /* each is at most PCD_MAX_POINTS: the product fits 63 bits */
+    wh = (uint64_t)h.width * (uint64_t)h.height;
+    if (h.points < 0) {
+        if (wh > (uint64_t)PCD_MAX_POINTS) {
+            snprintf(err, err_len,
+                     "WIDTH x HEIGHT (%ld x %ld) is more than %ld points",
+                     h.width, h.height, PCD_MAX_POINTS);
+            return -1;
+        }
+        h.points = (long)wh;
+    }
+    if (wh != (uint64_t)h.points) {
         snprintf(err, err_len,
                  "WIDTH x HEIGHT (%ld x %ld) differs from "
                  "POINTS %ld",
@@ -438,34 +640,46 @@ int pcd_parse(const char *buf, size_t len, double **xyz_out, long *n_out,
     n = h.points;
     if (n == 0)
         return 0;
-    if (h.data == PCD_BINARY && L.row_bytes * (size_t)n > len - pos) {
-        snprintf(err, err_len,
-                 "binary data truncated: %ld points need %zu "
-                 "bytes, file has %zu",
-                 n, (size_t)n * L.row_bytes, len - pos);
+    at = reader_offset(&rd);
+    if (h.data == PCD_BINARY_COMPRESSED)
+        rc = read_compressed(io, at, &L, n, e, b, err, err_len);
+    else if (h.data == PCD_BINARY)
+        rc = read_binary(io, at, &L, n, e, b->block, err, err_len);
+    else
+        rc = read_ascii(&rd, io->src->len - at, &L, n, e, err, err_len);
+    if (rc)
         return -1;
-    }
-    if (h.data == PCD_ASCII && (size_t)n > len - pos) { /* a byte a point */
-        snprintf(err, err_len, "ascii data truncated: POINTS %ld", n);
-        return -1;
-    }
-    if (h.data == PCD_BINARY_COMPRESSED &&
-        check_compressed_sizes(buf + pos, len - pos, &L, n, err, err_len))
-        return -1;
-    xyz = malloc((size_t)n * 3 * sizeof *xyz);
-    if (!xyz) {
-        snprintf(err, err_len, "out of memory for %ld points", n);
-        return -1;
-    }
-    if (h.data == PCD_BINARY_COMPRESSED
-            ? read_compressed(buf + pos, &L, n, xyz, err, err_len)
-        : h.data == PCD_BINARY
-            ? read_binary(buf + pos, len - pos, &L, n, xyz, err, err_len)
-            : read_ascii(buf, len, pos, &L, n, xyz, err, err_len)) {
-        free(xyz);
-        return -1;
-    }
-    *xyz_out = xyz;
+    emit_flush(e);
     *n_out = n;
     return 0;
+}
+
+int pcd_read(const struct pcd_source *src, pcd_sink sink, void *ctx,
+             long *n_out, char *err, size_t err_len)
+{
+    struct pcd_io io;
+    struct emitter e;
+    struct pcd_buffers *b = (struct pcd_buffers *)budget_malloc(sizeof *b);
+    int rc;
+    *n_out = 0;
+    if (!b) {
+        snprintf(err, err_len, "out of memory");
+        return -1;
+    }
+    io.src = src;
+    io.failed = 0;
+    e.sink = sink;
+    e.ctx = ctx;
+    e.xyz = b->xyz;
+    e.n = 0;
+    rc = read_cloud(&io, b, &e, n_out, err, err_len);
+    if (io.failed) { /* what the reader made of the missing bytes is moot */
+        snprintf(err, err_len, "cannot read: %s",
+                 io.failed > 0 ? strerror(io.failed)
+                               : "the file is shorter than when opened");
+        *n_out = 0;
+        rc = -1;
+    }
+    budget_free(b);
+    return rc;
 }

@@ -3,68 +3,122 @@
 #include "scene.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+#include <unistd.h>
 
+#include "budget.h"
 #include "json.h"
 #include "pcd.h"
 
-/* Larger files (or endless ones such as /dev/zero) are refused. */
-#define SCENE_MAX_FILE_BYTES (1 << 30)
+/* Larger files are refused. */
+#define SCENE_MAX_FILE_BYTES ((size_t)1 << 30)
+
+/* What a file that is not a regular one is, for messages. */
+static const char *file_kind(mode_t mode)
+{
+    if (S_ISFIFO(mode))
+        return "a FIFO";
+    if (S_ISCHR(mode))
+        return "a character device";
+    if (S_ISBLK(mode))
+        return "a block device";
+    if (S_ISDIR(mode))
+        return "a directory";
+    if (S_ISSOCK(mode))
+        return "a socket";
+    return "not a regular file";
+}
+
+static int too_large(const char *name, char *err, size_t err_len)
+{
+    snprintf(err, err_len, "%s is larger than %d MiB", name,
+             (int)(SCENE_MAX_FILE_BYTES >> 20));
+    return -1;
+}
 
 int read_whole_file(const char *path, char **buf, size_t *len, char *err,
                     size_t err_len)
 {
     /* "-": standard input, as a pipe gives it */
-    int from_stdin = strcmp(path, "-") == 0, failed = 0;
-    FILE *f = from_stdin ? stdin : fopen(path, "rb");
-    size_t cap = 1 << 16, n = 0;
-    char *b;
-    if (from_stdin)
-        path = "standard input";
-    if (!f) {
+    int from_stdin = strcmp(path, "-") == 0, failed = 1;
+    int fd = from_stdin ? STDIN_FILENO : open(path, O_RDONLY | O_NOCTTY);
+    const char *name = from_stdin ? "standard input" : path;
+    struct stat st;
+    size_t cap = (size_t)1 << 16, n = 0;
+    char *b = NULL;
+    if (fd < 0) {
         snprintf(err, err_len, "cannot open %s: %s", path, strerror(errno));
         return -1;
     }
-    b = malloc(cap);
-    while (b) {
-        size_t got = fread(b + n, 1, cap - n - 1, f);
-        n += got;
-        if (n < cap - 1)
-            break;
-        if (cap >= SCENE_MAX_FILE_BYTES) {
-            snprintf(err, err_len, "%s is larger than %d MiB", path,
-                     SCENE_MAX_FILE_BYTES >> 20);
-            failed = 1;
-            break;
+    if (fstat(fd, &st) != 0) {
+        snprintf(err, err_len, "cannot read %s: %s", name, strerror(errno));
+        goto out;
+    }
+    /* a device would be read for ever (/dev/zero) or to its end (a disk);
+     * a terminal is someone typing */
+    if (S_ISBLK(st.st_mode) || (S_ISCHR(st.st_mode) && !isatty(fd))) {
+        snprintf(err, err_len, "%s is %s, not a regular file or a pipe", name,
+                 file_kind(st.st_mode));
+        goto out;
+    }
+    if (S_ISREG(st.st_mode)) { /* room for it all, the NUL and one more */
+        if ((uint64_t)st.st_size >= SCENE_MAX_FILE_BYTES - 1) {
+            too_large(name, err, err_len);
+            goto out;
         }
-        cap *= 2;
-        {
-            char *grown = realloc(b, cap);
-            if (!grown) {
-                free(b);
-                b = NULL;
-            } else {
-                b = grown;
+        cap = (size_t)st.st_size + 2;
+    }
+    b = budget_malloc(cap);
+    if (!b) {
+        snprintf(err, err_len, "out of memory reading %s", name);
+        goto out;
+    }
+    for (;;) {
+        ssize_t got;
+        if (n == cap - 1) {
+            size_t ncap =
+                cap > SCENE_MAX_FILE_BYTES / 2 ? SCENE_MAX_FILE_BYTES : cap * 2;
+            char *grown;
+            if (cap >= SCENE_MAX_FILE_BYTES) {
+                too_large(name, err, err_len);
+                goto out;
             }
+            grown = budget_realloc(b, ncap);
+            if (!grown) {
+                snprintf(err, err_len, "out of memory reading %s", name);
+                goto out;
+            }
+            b = grown;
+            cap = ncap;
         }
-    }
-    if (!failed && (!b || ferror(f))) {
-        snprintf(err, err_len, "cannot read %s", path);
-        failed = 1;
-    }
-    if (!from_stdin)
-        fclose(f);
-    if (failed) {
-        free(b);
-        return -1;
+        got = read(fd, b + n, cap - 1 - n);
+        if (got < 0 && errno == EINTR)
+            continue;
+        if (got < 0) {
+            snprintf(err, err_len, "cannot read %s", name);
+            goto out;
+        }
+        if (got == 0)
+            break;
+        n += (size_t)got;
     }
     b[n] = '\0';
     *buf = b;
     *len = n;
-    return 0;
+    b = NULL;
+    failed = 0;
+out:
+    budget_free(b);
+    if (!from_stdin)
+        close(fd);
+    return failed ? -1 : 0;
 }
 
 /* Exactly n numbers, each within [lo, hi]. */
@@ -216,57 +270,71 @@ static int parse_target(const struct json *root, const char *key,
     return 0;
 }
 
-static int append_points(struct scene *sc, const double *xyz, long n, char *err,
-                         size_t err_len)
+/* Inline points on their way to the sink, a chunk at a time. */
+struct inline_points {
+    const struct scene_sink *sink;
+    char *err;
+    size_t err_len;
+    long n;
+    double xyz[3 * SCENE_CHUNK_POINTS];
+};
+
+static void flush_points(struct inline_points *p)
 {
-    double *grown;
-    if (n == 0)
-        return 0;
-    grown = realloc(sc->points, (size_t)(sc->n_points + n) * 3 * sizeof *grown);
-    if (!grown) {
-        snprintf(err, err_len, "out of memory for %ld points",
-                 sc->n_points + n);
+    if (p->n > 0 && p->sink && p->sink->add)
+        p->sink->add(p->sink->ctx, p->xyz, p->n);
+    p->n = 0;
+}
+
+static int take_point(void *ctx, size_t i, const struct json *item)
+{
+    struct inline_points *p = (struct inline_points *)ctx;
+    char what[48];
+    snprintf(what, sizeof what, "points[%zu]", i);
+    if (get_numbers(item, what, 3, -HUGE_VAL, HUGE_VAL, p->xyz + 3 * p->n,
+                    p->err, p->err_len))
         return -1;
-    }
-    memcpy(grown + 3 * sc->n_points, xyz, (size_t)n * 3 * sizeof *xyz);
-    sc->points = grown;
-    sc->n_points += n;
+    if (++p->n == SCENE_CHUNK_POINTS)
+        flush_points(p);
     return 0;
 }
 
-static int parse_inline_points(const struct json *v, struct scene *sc,
+/* The points array: parsed without a tree (json_parse_deferring), read
+ * again here a point at a time. */
+static int parse_inline_points(const char *text, size_t len,
+                               const struct json *v,
+                               const struct scene_sink *sink, struct scene *sc,
                                char *err, size_t err_len)
 {
-    size_t i;
+    struct inline_points p;
     if (v->type != JSON_ARRAY) {
         snprintf(err, err_len, "points must be an array of [x, y, z]");
         return -1;
     }
-    sc->points = v->count ? malloc(v->count * 3 * sizeof *sc->points) : NULL;
-    if (v->count && !sc->points) {
-        snprintf(err, err_len, "out of memory for %zu points", v->count);
+    p.sink = sink;
+    p.err = err;
+    p.err_len = err_len;
+    p.n = 0;
+    err[0] = '\0';
+    if (json_each_item(text, len, v, take_point, &p, err, err_len)) {
+        if (!err[0])
+            snprintf(err, err_len, "out of memory");
         return -1;
     }
-    for (i = 0; i < v->count; i++) {
-        char what[48];
-        snprintf(what, sizeof what, "points[%zu]", i);
-        if (get_numbers(&v->items[i], what, 3, -HUGE_VAL, HUGE_VAL,
-                        sc->points + 3 * i, err, err_len))
-            return -1;
-    }
-    sc->n_points = (long)v->count;
+    flush_points(&p);
+    sc->n_points += (long)v->count;
     return 0;
 }
 
 static int load_points_file(const struct json *v, const char *base_dir,
-                            struct scene *sc, char *err, size_t err_len)
+                            const struct scene_sink *sink, struct scene *sc,
+                            char *err, size_t err_len)
 {
     char path[4096], perr[256];
-    char *buf;
-    size_t len;
-    double *xyz;
+    struct pcd_source src;
+    struct stat st;
     long n;
-    int rc;
+    int rc, fd, flags;
     if (v->type != JSON_STRING || v->string[0] == '\0') {
         snprintf(err, err_len, "points_file must be a file name");
         return -1;
@@ -275,21 +343,49 @@ static int load_points_file(const struct json *v, const char *base_dir,
         snprintf(path, sizeof path, "%s", v->string);
     else
         snprintf(path, sizeof path, "%s/%s", base_dir, v->string);
-    if (read_whole_file(path, &buf, &len, err, err_len))
+    /* O_NONBLOCK: a FIFO opens at once (to be refused) instead of waiting
+     * for a writer; it changes nothing for a regular file */
+    fd = open(path, O_RDONLY | O_NONBLOCK | O_NOCTTY);
+    if (fd < 0) {
+        snprintf(err, err_len, "cannot open %s: %s", path, strerror(errno));
         return -1;
-    rc = pcd_parse(buf, len, &xyz, &n, perr, sizeof perr);
-    free(buf);
+    }
+    if (fstat(fd, &st) != 0) {
+        snprintf(err, err_len, "cannot read %s: %s", path, strerror(errno));
+        close(fd);
+        return -1;
+    }
+    if (!S_ISREG(st.st_mode)) {
+        snprintf(err, err_len, "%s is %s, not a regular file", path,
+                 file_kind(st.st_mode));
+        close(fd);
+        return -1;
+    }
+    if ((uint64_t)st.st_size >= SCENE_MAX_FILE_BYTES - 1) {
+        close(fd);
+        return too_large(path, err, err_len);
+    }
+    /* a regular file: blocking reads, as ever */
+    flags = fcntl(fd, F_GETFL);
+    if (flags >= 0)
+        fcntl(fd, F_SETFL, flags & ~O_NONBLOCK);
+    src.fd = fd;
+    src.mem = NULL;
+    src.len = (uint64_t)st.st_size;
+    rc = pcd_read(&src, sink ? sink->add : NULL, sink ? sink->ctx : NULL, &n,
+                  perr, sizeof perr);
+    close(fd);
     if (rc) {
         snprintf(err, err_len, "%s: %s", path, perr);
         return -1;
     }
-    rc = append_points(sc, xyz, n, err, err_len);
-    free(xyz);
-    return rc;
+    sc->n_points += n;
+    return 0;
 }
 
 int scene_parse(const char *text, size_t len, const char *base_dir,
-                struct scene *sc, char *err, size_t err_len)
+                const struct scene_sink *sink, struct scene *sc, char *err,
+                size_t err_len)
 {
     static const char *const keys[] = {
         "version",  "name",     "comment",
@@ -303,7 +399,7 @@ int scene_parse(const char *text, size_t len, const char *base_dir,
 
     memset(sc, 0, sizeof *sc);
     qrt_params_default(&sc->params);
-    root = json_parse(text, len, jerr, sizeof jerr);
+    root = json_parse_deferring(text, len, "points", jerr, sizeof jerr);
     if (!root) {
         snprintf(err, err_len, "malformed JSON %s", jerr);
         return -1;
@@ -329,15 +425,17 @@ int scene_parse(const char *text, size_t len, const char *base_dir,
         get_number(root, "grid_deg", QRT_GRID_DEG_MIN, 180.0,
                    &sc->params.grid_deg, err, err_len))
         goto out;
+    if (sink && sink->begin)
+        sink->begin(sink->ctx, &sc->params);
     if (!json_get(root, "points") && !json_get(root, "points_file")) {
         snprintf(err, err_len, "missing field \"points\" (or \"points_file\")");
         goto out;
     }
     if ((v = json_get(root, "points")) &&
-        parse_inline_points(v, sc, err, err_len))
+        parse_inline_points(text, len, v, sink, sc, err, err_len))
         goto out;
     if ((v = json_get(root, "points_file")) &&
-        load_points_file(v, base_dir, sc, err, err_len))
+        load_points_file(v, base_dir, sink, sc, err, err_len))
         goto out;
     if (parse_target(root, "start", &sc->params.arm, &sc->start, err,
                      err_len) ||
@@ -346,12 +444,11 @@ int scene_parse(const char *text, size_t len, const char *base_dir,
     rc = 0;
 out:
     json_free(root);
-    if (rc)
-        scene_free(sc);
     return rc;
 }
 
-int scene_load(const char *path, struct scene *sc, char *err, size_t err_len)
+int scene_load(const char *path, const struct scene_sink *sink,
+               struct scene *sc, char *err, size_t err_len)
 {
     char *buf, dir[4096];
     const char *slash = strrchr(path, '/');
@@ -366,14 +463,7 @@ int scene_load(const char *path, struct scene *sc, char *err, size_t err_len)
     } else {
         strcpy(dir, slash ? "/" : ".");
     }
-    rc = scene_parse(buf, len, dir, sc, err, err_len);
-    free(buf);
+    rc = scene_parse(buf, len, dir, sink, sc, err, err_len);
+    budget_free(buf);
     return rc;
-}
-
-void scene_free(struct scene *sc)
-{
-    free(sc->points);
-    sc->points = NULL;
-    sc->n_points = 0;
 }

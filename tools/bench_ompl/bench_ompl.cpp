@@ -265,14 +265,34 @@ void evict_caches(std::vector<unsigned char> &buf)
     evict_sink = sum;
 }
 
+// A scene with its points held whole (the checker and the timed runs read
+// them all; the CLI streams them into its planner instead).
+struct held_scene {
+    scene sc;
+    std::vector<double> points;
+};
+
+void hold_points(void *ctx, const double *xyz, long n)
+{
+    auto *points = static_cast<std::vector<double> *>(ctx);
+    points->insert(points->end(), xyz, xyz + 3 * n);
+}
+
+int load_scene(const char *path, held_scene *h, char *err, size_t err_len)
+{
+    scene_sink sink = {nullptr, hold_points, &h->points};
+    h->points.clear();
+    return scene_load(path, &sink, &h->sc, err, err_len);
+}
+
 // The points a timed run reads: the scene's own, or (replanning) a copy
 // just made in scan, as a scan arrives.
-const double *arrived(const scene &sc, bool replanning,
+const double *arrived(const held_scene &h, bool replanning,
                       std::vector<double> &scan)
 {
     if (!replanning)
-        return sc.points;
-    scan.assign(sc.points, sc.points + 3 * std::max(sc.n_points, 0L));
+        return h.points.data();
+    scan = h.points;
     return scan.data();
 }
 
@@ -412,16 +432,17 @@ int main(int argc, char **argv)
     static qrt_plan plan;
     const char *planners[] = {"RRTConnect", "PRM", "RRTstar"};
     for (size_t si = 0; si < scenes.size(); si++) {
-        scene sc;
+        held_scene held;
+        const scene &sc = held.sc;
         char err[256];
-        if (scene_load(scenes[si], &sc, err, sizeof err) != 0) {
+        if (load_scene(scenes[si], &held, err, sizeof err) != 0) {
             std::fprintf(stderr, "bench_ompl: %s\n", err);
             return 1;
         }
         std::fprintf(stderr, "\r[%zu/%zu] %s          ", si + 1, scenes.size(),
                      scenes[si]);
         const std::vector<double> before =
-            replanning ? scan_before(sc.points, sc.n_points)
+            replanning ? scan_before(held.points.data(), sc.n_points)
                        : std::vector<double>();
         for (int rep = 0; rep < repeats; rep++) {
             // ours, end to end: points, then a plan that finds only the
@@ -433,7 +454,7 @@ int main(int argc, char **argv)
                 qrt_planner_plan_now(&pl, &sc.start, &sc.goal, &plan);
             }
             std::vector<double> scan;
-            const double *points = arrived(sc, replanning, scan);
+            const double *points = arrived(held, replanning, scan);
             if (cold)
                 evict_caches(evict_buf);
             double t0 = now_ms();
@@ -477,7 +498,7 @@ int main(int argc, char **argv)
                     run_ompl(sc, plan,
                              checker_for(sc, before.data(), sc.n_points), name,
                              limit);
-                const double *points = arrived(sc, replanning, scan);
+                const double *points = arrived(held, replanning, scan);
                 if (cold)
                     evict_caches(evict_buf);
                 double t1 = now_ms();
@@ -491,7 +512,6 @@ int main(int argc, char **argv)
             }
         }
         std::fflush(csv);
-        scene_free(&sc);
     }
     std::fprintf(stderr, "\n");
     if (csv != stdout)
