@@ -33,6 +33,12 @@ if [ -x build/bin/qrtpland ]; then
         --out "$out" | tee -a "$out/table5.txt"
 fi
 
+# what authenticated LCM costs (issue 35): keyed and unkeyed daemons in turn
+if [ -x build/bin/qrtpland ]; then
+    .venv/bin/python tools/bench_auth.py --pairs "${QRT_BENCH_AUTH_PAIRS:-300}" \
+        --out "$out" | tee -a "$out/table5.txt"
+fi
+
 # scan that blocks the executing path -> quick-stop frame on the bus, in the
 # SocketCAN VM (issue 5); skipped with a message where there is no vcan
 if [ -x build/bin/qrtpland ] && [ -x build/bin/servo_sim ]; then

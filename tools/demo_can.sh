@@ -34,17 +34,29 @@ build/bin/servo_sim --iface vcan0 --start-deg -100,0,0 --servo-error 5 \
     2>"$out/servo_sim.log" &
 sim=$!
 url="udpm://239.255.76.67:7790?ttl=0&recv_buf_size=4194304"
-build/bin/qrtpland --lcm-url "$url" --can vcan0 --speed 60 --accel 120 \
+# the senders' keys (docs/security.md): the daemon moves the arm only on
+# requests and scans authenticated with them
+keys=$out/keys
+mkdir -p -m 700 "$keys"
+for k in op:operator s0:sensor; do
+    [ -f "$keys/${k%%:*}.key" ] || build/bin/qrtpland --gen-key "${k%%:*}" \
+        --role "${k##*:}" --key-dir "$keys" >/dev/null
+done
+build/bin/qrtpland --lcm-url "$url" --can vcan0 --keys "$keys" --speed 60 --accel 120 \
     "${slow[@]}" 2>"$out/qrtpland.log" &
 daemon=$!
 trap 'kill $daemon $sim 2>/dev/null; wait 2>/dev/null' EXIT
 QRT_LCMTYPES_PY=build/lcmtypes/python .venv/bin/python - "$url" "$out" <<'PY'
 import csv, os, sys, time
 sys.path[:0] = ["tests/daemon", "tools", "tests/canlink"]
-import conftest as cf, lcm, numpy as np, oracle
+import conftest as cf, numpy as np, oracle
+import qrtauth
+import vm_checks
 from vm_checks import ScanFeed
 url, out = sys.argv[1], sys.argv[2]
-lc = lcm.LCM(url)
+vm_checks.sign_as(qrtauth.Signer(os.path.join(out, "keys", n + ".key"))
+                  for n in ("op", "s0"))
+lc = vm_checks.signing_lcm(url)
 joints, plans = [], []
 lc.subscribe("QRT_JOINT_STATE", lambda c, d: joints.append(cf.joint_state_t.decode(d)))
 lc.subscribe("QRT_PLAN", lambda c, d: plans.append(cf.plan_t.decode(d)))

@@ -13,7 +13,7 @@ debs=(build-essential cmake ninja-build pkg-config clang libclang-rt-14-dev valg
       libc6-dev-arm64-cross qemu-user-static gcc-arm-none-eabi
       libnewlib-arm-none-eabi qemu-system-arm
       # the daemon (LCM, Eigen), the OMPL comparison, CAN tools and the VM
-      g++ liblcm-dev liblcm-bin libeigen3-dev libompl-dev can-utils iproute2
+      g++ liblcm-dev liblcm-bin libeigen3-dev libsodium-dev libompl-dev can-utils iproute2
       qemu-system-x86 busybox-static)
 missing=()
 for p in "${debs[@]}"; do

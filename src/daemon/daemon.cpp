@@ -6,6 +6,7 @@
 #include <cstring>
 #include <pthread.h>
 #include <sched.h>
+#include <sodium.h>
 #include <thread>
 
 #include "decode.hpp"
@@ -82,6 +83,25 @@ void Daemon::reject(const std::string &why)
 
 // --- the LCM thread --------------------------------------------------------
 
+// The message a handler may act on (auth.hpp), or false after counting and
+// logging the refusal.
+bool Daemon::admit(const lcm::ReceiveBuffer *rbuf, const std::string &channel,
+                   SenderRole role, OpenedMessage *msg)
+{
+    AuthRefusal reason{};
+    std::string why;
+    bool ok = auth_->open(channel, static_cast<const uint8_t *>(rbuf->data),
+                          size_t(rbuf->data_size), role, wall_us(), msg,
+                          &reason, &why);
+    std::lock_guard<std::mutex> lock(mu_);
+    if (!ok) {
+        auth_refused_[size_t(reason)]++;
+        reject(channel + ": refused (" + refusal_name(reason) + "): " + why);
+    } else
+        (msg->sender ? messages_authenticated_ : messages_unsigned_)++;
+    return ok;
+}
+
 // Caller holds mu_. With --require-sensor or --sensor only those ids are
 // taken; without, the first kMaxSensors ids seen.
 bool Daemon::sensor_taken(const std::string &id, std::string *why)
@@ -112,13 +132,16 @@ void Daemon::on_scan(const lcm::ReceiveBuffer *rbuf, const std::string &channel)
     auto msg = std::make_shared<qrtplan::range_scan_t>();
     PendingScan p;
     p.received_us = t;
-    bool ok = scan_claims_fit(rbuf->data, int(rbuf->data_size),
-                              opts_.max_returns, &why);
-    if (ok && safe_decode(msg.get(), rbuf->data, int(rbuf->data_size)) < 0) {
+    OpenedMessage in;
+    if (!admit(rbuf, channel, SenderRole::sensor, &in))
+        return;
+    bool ok =
+        scan_claims_fit(in.payload, in.payload_size, opts_.max_returns, &why);
+    if (ok && safe_decode(msg.get(), in.payload, in.payload_size) < 0) {
         ok = false;
         why = "not a qrtplan.range_scan_t (wrong type fingerprint or "
               "truncated, " +
-              std::to_string(rbuf->data_size) + " bytes)";
+              std::to_string(in.payload_size) + " bytes)";
     }
     if (ok) {
         // refused here, a bad scan never displaces a good pending one
@@ -133,6 +156,14 @@ void Daemon::on_scan(const lcm::ReceiveBuffer *rbuf, const std::string &channel)
         return;
     }
     const std::string &id = msg->sensor_id;
+    // a sensor's key speaks for that sensor only: another's scans from it
+    // could erase the other sensor's obstacles
+    if (in.sender && in.sender->name != id) {
+        auth_refused_[size_t(AuthRefusal::not_permitted)]++;
+        reject(channel + ": scan refused: sensor key '" + in.sender->name +
+               "' sent a scan of sensor '" + id + "'");
+        return;
+    }
     if (!sensor_taken(id, &why)) {
         scans_unknown_sensor_++;
         reject(channel + ": scan refused: " + why);
@@ -175,15 +206,18 @@ void Daemon::on_scan(const lcm::ReceiveBuffer *rbuf, const std::string &channel)
 void Daemon::on_request(const lcm::ReceiveBuffer *rbuf,
                         const std::string &channel)
 {
+    OpenedMessage in;
+    if (!admit(rbuf, channel, SenderRole::operator_, &in))
+        return;
     qrtplan::plan_request_t r;
-    int rc = safe_decode(&r, rbuf->data, int(rbuf->data_size));
+    int rc = safe_decode(&r, in.payload, in.payload_size);
     std::lock_guard<std::mutex> lock(mu_);
     if (rc < 0) {
         requests_rejected_++;
         reject(channel +
                ": not a qrtplan.plan_request_t (wrong type "
                "fingerprint or truncated, " +
-               std::to_string(rbuf->data_size) + " bytes)");
+               std::to_string(in.payload_size) + " bytes)");
         return;
     }
     requests_received_++;
@@ -196,14 +230,18 @@ void Daemon::on_request(const lcm::ReceiveBuffer *rbuf,
 void Daemon::on_joints(const lcm::ReceiveBuffer *rbuf,
                        const std::string &channel)
 {
+    OpenedMessage in;
+    if (!admit(rbuf, channel, SenderRole::joints, &in))
+        return;
     qrtplan::joint_state_t js;
     // fingerprint 8, utime 8, joints 24, moving 1, then drive_state
-    int rc = lcm_string_ok(rbuf->data, int(rbuf->data_size), 41)
-                 ? safe_decode(&js, rbuf->data, int(rbuf->data_size))
+    int rc = lcm_string_ok(in.payload, in.payload_size, 41)
+                 ? safe_decode(&js, in.payload, in.payload_size)
                  : -1;
     std::lock_guard<std::mutex> lock(mu_);
     if (rc < 0 || !std::isfinite(js.joints_deg[0]) ||
         !std::isfinite(js.joints_deg[1]) || !std::isfinite(js.joints_deg[2])) {
+        joint_states_rejected_++;
         reject(channel + ": joint state refused (wrong type, truncated or "
                          "non-finite)");
         return;
@@ -785,9 +823,15 @@ bool Daemon::host_alive(uint64_t now, std::string *why) const
 
 void Daemon::clock_loop(const std::atomic<bool> &stop)
 {
-    int64_t next_status = now_us();
+    int64_t next_status = now_us(), next_insecure_warning = next_status;
     while (!stop) {
         int64_t t = now_us();
+        if (opts_.insecure_lcm && t >= next_insecure_warning) {
+            next_insecure_warning = t + 60000000;
+            log(LogLevel::warn,
+                "--insecure-lcm: unsigned LCM messages are taken; anyone who "
+                "can reach this computer's LCM port can move the arm");
+        }
         if (can_) {
             CanLinkStatus cs = can_->status();
             if (cs.master.all_positions_known) {
@@ -830,6 +874,7 @@ void Daemon::clock_loop(const std::atomic<bool> &stop)
                 s.scans_rejected = scans_rejected_;
                 s.requests_received = requests_received_;
                 s.requests_rejected = requests_rejected_;
+                s.joint_states_rejected = joint_states_rejected_;
                 s.plans_published = plans_published_;
                 s.last_plan_latency_us = last_latency_us_;
                 s.points_in_picture = int32_t(picture_points_);
@@ -841,7 +886,19 @@ void Daemon::clock_loop(const std::atomic<bool> &stop)
                 s.scans_over_budget = scans_over_budget_;
                 s.returns_out_of_reach = returns_out_of_reach_;
                 s.evidence_stops = evidence_stops_;
+                s.messages_authenticated = messages_authenticated_;
+                s.messages_unsigned = messages_unsigned_;
+                const auto &r = auth_refused_;
+                s.auth_unsigned = r[size_t(AuthRefusal::unsigned_message)];
+                s.auth_malformed = r[size_t(AuthRefusal::malformed)];
+                s.auth_unknown_sender = r[size_t(AuthRefusal::unknown_sender)];
+                s.auth_bad_mac = r[size_t(AuthRefusal::bad_mac)];
+                s.auth_replayed = r[size_t(AuthRefusal::replayed)];
+                s.auth_counter_ahead = r[size_t(AuthRefusal::counter_ahead)];
+                s.auth_not_permitted = r[size_t(AuthRefusal::not_permitted)];
             }
+            s.lcm_input = auth_->accepts_unsigned() ? "unsigned accepted"
+                                                    : "authenticated";
             s.lcm_datagrams_lost = lcm_datagrams_lost();
             s.log_lines_suppressed = log_lines_suppressed();
             s.can_state = can_state;
@@ -852,6 +909,44 @@ void Daemon::clock_loop(const std::atomic<bool> &stop)
 }
 
 // --- run -------------------------------------------------------------------
+
+// Who may change what the arm does (auth.hpp). With --can the default is
+// signed input only: without keys the daemon does not start, unless the
+// operator asked for --insecure-lcm.
+bool Daemon::start_auth()
+{
+    std::vector<SenderKey> keys;
+    if (sodium_init() < 0) {
+        log(LogLevel::error, "libsodium failed to start");
+        return false;
+    }
+    if (!opts_.keys_dir.empty()) {
+        std::string why;
+        if (!load_keys(opts_.keys_dir, &keys, &why)) {
+            log(LogLevel::error, "--keys: %s", why.c_str());
+            return false;
+        }
+        std::string names;
+        for (const SenderKey &k : keys)
+            names += (names.empty() ? "" : ", ") + k.name + " (" +
+                     role_name(k.role) + ")";
+        log(LogLevel::info, "trusted senders: %s", names.c_str());
+    } else if (!opts_.can_iface.empty() && !opts_.insecure_lcm) {
+        log(LogLevel::error,
+            "--can needs --keys DIR: only authenticated messages may move "
+            "the arm (qrtpland --gen-key NAME --role ROLE makes keys; "
+            "docs/security.md). --insecure-lcm takes unsigned messages "
+            "from anyone on the network instead");
+        return false;
+    }
+    bool accept_unsigned = keys.empty() || opts_.insecure_lcm;
+    if (accept_unsigned && !opts_.insecure_lcm)
+        log(LogLevel::warn, "no --keys: unsigned LCM messages are taken "
+                            "(planning only; the status says so)");
+    auth_.reset(new Authenticator(std::move(keys), accept_unsigned, wall_us(),
+                                  int64_t(opts_.max_clock_skew_s * 1e6)));
+    return true;
+}
 
 int Daemon::run(const RunFlags &flags)
 {
@@ -876,6 +971,8 @@ int Daemon::run(const RunFlags &flags)
         arm.limit_deg[0][1], arm.limit_deg[1][0], arm.limit_deg[1][1],
         arm.limit_deg[2][0], arm.limit_deg[2][1], opts_.params.grid_deg,
         opts_.params.margin_m, opts_.params.cspace_margin_deg);
+    if (!start_auth())
+        return 2;
     if (!opts_.can_iface.empty()) {
         const qrtcan_master_config &c = opts_.can;
         log(LogLevel::info,

@@ -25,6 +25,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "auth.hpp"
 #include "can_link.hpp"
 #include "ingest.hpp"
 #include "options.hpp"
@@ -65,12 +66,15 @@ class Daemon
     void on_scan(const lcm::ReceiveBuffer *rbuf, const std::string &channel);
     void on_request(const lcm::ReceiveBuffer *rbuf, const std::string &channel);
     void on_joints(const lcm::ReceiveBuffer *rbuf, const std::string &channel);
+    bool admit(const lcm::ReceiveBuffer *rbuf, const std::string &channel,
+               SenderRole role, OpenedMessage *msg);
     bool sensor_taken(const std::string &id, std::string *why);
     void planner_loop(const RunFlags &flags);
     void clock_loop(const std::atomic<bool> &stop);
     void guard_loop(const RunFlags &flags);
     void guard_check(const CanLinkStatus &cs, int64_t received_us);
     void guard_evidence(const CanLinkStatus &cs);
+    bool start_auth();
     bool host_alive(uint64_t now_us, std::string *why) const;
     Path rest_of_path(const CanLinkStatus &cs) const;
     bool executing_blocked(const CanLinkStatus &cs);
@@ -94,6 +98,7 @@ class Daemon
     Options opts_;
     lcm::LCM lcm_;
     std::unique_ptr<CanLink> can_;
+    std::unique_ptr<Authenticator> auth_; // LCM thread only, after run()
     std::unique_ptr<qrt_planner> planner_;
     Picture picture_;
 
@@ -111,6 +116,8 @@ class Daemon
     int64_t scans_over_budget_ = 0; // did not fit the picture's budget
     int64_t returns_out_of_reach_ = 0;
     int64_t evidence_stops_ = 0, watchdog_trips_ = 0;
+    int64_t messages_authenticated_ = 0, messages_unsigned_ = 0;
+    std::array<int64_t, kAuthRefusals> auth_refused_{}; // by AuthRefusal
     bool have_pending_request_ = false;
     qrtplan::plan_request_t pending_request_{};
     int64_t request_received_us_ = 0;
@@ -118,6 +125,7 @@ class Daemon
     std::array<double, 3> joints_{};
     int64_t scans_received_ = 0, scans_dropped_ = 0, scans_rejected_ = 0;
     int64_t requests_received_ = 0, requests_rejected_ = 0;
+    int64_t joint_states_rejected_ = 0;
     int64_t plans_published_ = 0, last_latency_us_ = 0;
     long picture_points_ = 0, points_dropped_ = 0;
     std::string last_error_;

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "daemon.hpp"
+#include "keyfile.hpp"
 #include "log.hpp"
 #include "options.hpp"
 
@@ -38,6 +39,20 @@ int main(int argc, char **argv)
     if (rc != 0) {
         std::fprintf(stderr, "qrtpland: %s\n", error.c_str());
         return 2;
+    }
+    if (!opts.gen_key_name.empty()) {
+        qrt::SenderRole role{};
+        qrt::parse_role(opts.gen_key_role, &role); // checked by the options
+        if (!qrt::generate_key(opts.gen_key_dir, opts.gen_key_name, role,
+                               &error)) {
+            std::fprintf(stderr, "qrtpland: --gen-key: %s\n", error.c_str());
+            return 2;
+        }
+        std::printf("%s/%s.key: the %s key: one copy with the sender, one in "
+                    "qrtpland's --keys directory\n",
+                    opts.gen_key_dir.c_str(), opts.gen_key_name.c_str(),
+                    opts.gen_key_role.c_str());
+        return 0;
     }
     qrt::LogLevel level = qrt::LogLevel::info;
     qrt::parse_log_level(opts.log_level.c_str(), &level);

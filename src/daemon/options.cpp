@@ -1,6 +1,7 @@
 #include "options.hpp"
 
 #include "can_link.hpp"
+#include "keyfile.hpp"
 #include "qrtplan/qrtplan.h"
 
 #include <algorithm>
@@ -90,6 +91,19 @@ const char *kUsage =
     "  --consumer-heartbeat MS  each drive is told to quick-stop when it\n"
     "                           hears no heartbeat of ours this long (0x1016,\n"
     "                           0x6007; 300)\n"
+    "  --keys DIR               take only LCM messages authenticated with a\n"
+    "                           key whose NAME.key is in DIR (owner-only);\n"
+    "                           without it, unsigned messages are taken, and\n"
+    "                           --can refuses to start\n"
+    "  --insecure-lcm           take unsigned messages even with --can\n"
+    "                           (warned every minute): anyone who reaches\n"
+    "                           the LCM port can then move the arm\n"
+    "  --gen-key NAME           write a new key to DIR/NAME.key (a copy for\n"
+    "                           the sender, a copy for --keys), then exit;\n"
+    "                           with --role operator|sensor|joints\n"
+    "                           (operator: plan requests; sensor: scans of\n"
+    "                           sensor_id NAME; joints: joint states) and\n"
+    "                           --key-dir DIR (.; made owner-only if new)\n"
     "  --log-level LEVEL        error, warn, info or debug (info)\n"
     "  --test-hooks             SIGUSR1 freezes the planner thread, SIGUSR2\n"
     "                           the guard thread (for the watchdog's tests)\n"
@@ -268,6 +282,21 @@ bool apply(Options *o, const std::string &key, const std::string &value,
         if (!number(1, 10000))
             return bad("milliseconds in 1..10000");
         o->can.sdo_timeout_us = uint32_t(v * 1000.0);
+    } else if (key == "keys") {
+        o->keys_dir = value;
+    } else if (key == "insecure-lcm") {
+        o->insecure_lcm = true;
+    } else if (key == "gen-key") {
+        if (!key_name_ok(value))
+            return bad("1..64 of A-Z a-z 0-9 _ - . (not starting with .)");
+        o->gen_key_name = value;
+    } else if (key == "role") {
+        SenderRole role;
+        if (!parse_role(value, &role))
+            return bad("operator, sensor or joints");
+        o->gen_key_role = value;
+    } else if (key == "key-dir") {
+        o->gen_key_dir = value;
     } else if (key == "log-level") {
         if (value != "error" && value != "warn" && value != "info" &&
             value != "debug")
@@ -282,7 +311,7 @@ bool apply(Options *o, const std::string &key, const std::string &value,
 
 bool takes_no_value(const std::string &key)
 {
-    return key == "dijkstra" || key == "test-hooks";
+    return key == "dijkstra" || key == "test-hooks" || key == "insecure-lcm";
 }
 
 bool read_config(const std::string &path, Options *o, std::string *error)

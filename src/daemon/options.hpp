@@ -39,6 +39,11 @@ struct Options {
     std::string can_iface;           // empty: no CAN
     qrtcan_master_config can{};      // nodes, scales, speeds
     std::string log_level = "info";
+    // who may change what the arm does (docs/security.md)
+    std::string keys_dir;      // the trusted senders' NAME.key files
+    bool insecure_lcm = false; // take unsigned messages (with --can too)
+    // --gen-key NAME: write DIR/NAME.key, then exit
+    std::string gen_key_name, gen_key_role = "operator", gen_key_dir = ".";
 };
 
 // Fills opts from argv (after defaults and any --config FILE). Returns 0 to

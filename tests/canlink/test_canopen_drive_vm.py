@@ -36,8 +36,8 @@ sys.path[:0] = [os.path.join(REPO, "tools"), os.path.join(REPO, "tests", "daemon
 if "--lcmtypes" in sys.argv:
     os.environ["QRT_LCMTYPES_PY"] = sys.argv[sys.argv.index("--lcmtypes") + 1]
 import conftest as cf  # noqa: E402
-from vm_checks import DaemonWatch, ScanFeed, check, failures  # noqa: E402
-import lcm  # noqa: E402
+from vm_checks import (DaemonWatch, ScanFeed, check, failures,  # noqa: E402
+                       signing_lcm, trust)
 
 
 
@@ -292,7 +292,8 @@ def main():
     threading.Thread(target=motion, daemon=True).start()
 
     url = "udpm://239.255.76.67:7778?ttl=0&recv_buf_size=4194304"
-    lc = lcm.LCM(url)
+    keys = trust(args.daemon, args.out)  # before any LCM instance signs
+    lc = signing_lcm(url)
     scene, pts = cf.scene_points("table4_one_sphere.json")
     t0 = time.time()
     logs = []
@@ -306,7 +307,7 @@ def main():
         # and 500 ms (50) for an SDO answer (seen: "drive did not answer an
         # SDO" at 50)
         return subprocess.Popen([args.daemon, "--lcm-url", url, "--can", "vcan0",
-                                 "--speed", "60", "--accel", "120",
+                                 *keys, "--speed", "60", "--accel", "120",
                                  "--heartbeat-timeout", "1500",
                                  "--sdo-timeout", "500"],
                                 stdout=log, stderr=subprocess.STDOUT)

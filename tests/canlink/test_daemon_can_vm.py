@@ -47,11 +47,11 @@ sys.path[:0] = [os.path.join(REPO, "tools"), os.path.join(REPO, "tests", "daemon
 if "--lcmtypes" in sys.argv:
     os.environ["QRT_LCMTYPES_PY"] = sys.argv[sys.argv.index("--lcmtypes") + 1]
 import conftest as cf  # noqa: E402
-import lcm  # noqa: E402
 import oracle  # noqa: E402
 from candump_capture import drain, dropped, start  # noqa: E402
 from vm_checks import (DaemonWatch, ScanFeed, check,  # noqa: E402
-                       failures, stop_daemon_and_drives)
+                       failures, stop_daemon_and_drives,
+                       signing_lcm, trust)
 
 # TPDO1 of nodes 1 and 2 with too few bytes (candump's spelling)
 MALFORMED = ("181#00", "182#0102")
@@ -93,11 +93,12 @@ def main():
     open(os.path.join(args.out, "qrtpland.log"), "w").close()
     daemon_log = open(os.path.join(args.out, "qrtpland.log"), "a+")
     daemon = subprocess.Popen([args.daemon, "--lcm-url", url, "--can", "vcan0",
+             *trust(args.daemon, args.out),
                                "--speed", "30", "--accel", "60", *DRIVES,
                                # emulated CPU, busy host: heartbeats come late
                                "--heartbeat-timeout", "1500"],
                               stdout=daemon_log, stderr=subprocess.STDOUT)
-    lc = lcm.LCM(url)
+    lc = signing_lcm(url)
     watch = DaemonWatch(lc, cf)
     joints, plans, statuses, pump = (watch.joints, watch.plans, watch.statuses,
                                      watch.pump)

@@ -39,10 +39,10 @@ sys.path[:0] = [os.path.join(REPO, "tools"), os.path.join(REPO, "tests", "daemon
 if "--lcmtypes" in sys.argv:
     os.environ["QRT_LCMTYPES_PY"] = sys.argv[sys.argv.index("--lcmtypes") + 1]
 import conftest as cf  # noqa: E402
-import lcm  # noqa: E402
 import oracle  # noqa: E402
 from vm_checks import (DaemonWatch, ScanFeed, check,  # noqa: E402
-                       failures, joint_gap, stop_daemon_and_drives)
+                       failures, joint_gap, stop_daemon_and_drives,
+                       signing_lcm, trust)
 
 NOISE_M = 0.002
 # a point moved by NOISE_M on each axis moves by up to this much
@@ -70,11 +70,12 @@ def main():
                            stderr=open(os.path.join(args.out, "sim.log"), "w"))
     log_path = os.path.join(args.out, "qrtpland.log")
     daemon = subprocess.Popen([args.daemon, "--lcm-url", url, "--can", "vcan0",
+             *trust(args.daemon, args.out),
                                "--speed", "60", "--accel", "120",
                                # emulated CPU, busy host: heartbeats come late
                                "--heartbeat-timeout", "1500"],
                               stdout=open(log_path, "w"), stderr=subprocess.STDOUT)
-    lc = lcm.LCM(url)
+    lc = signing_lcm(url)
     watch = DaemonWatch(lc, cf)
     joints, plans, statuses, pump = (watch.joints, watch.plans, watch.statuses,
                                      watch.pump)

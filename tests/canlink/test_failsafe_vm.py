@@ -75,13 +75,13 @@ sys.path[:0] = [os.path.join(REPO, "tools"), os.path.join(REPO, "tests", "daemon
 if "--lcmtypes" in sys.argv:
     os.environ["QRT_LCMTYPES_PY"] = sys.argv[sys.argv.index("--lcmtypes") + 1]
 import conftest as cf  # noqa: E402
-import lcm  # noqa: E402
 import oracle  # noqa: E402
 from candump_capture import drain, dropped, start  # noqa: E402
 from vm_checks import (MASTER_HEARTBEAT, DaemonWatch, ScanFeed,  # noqa: E402
                        check, failures, joint_gap, quick_stop_active,
                        quick_stop_onsets, read_capture, switch_on_disabled,
-                       tpdo_poses)
+                       tpdo_poses,
+                       signing_lcm, trust)
 
 URL = "udpm://239.255.76.67:7781?ttl=0&recv_buf_size=4194304"
 START = [-100.0, 0.0, 0.0]  # the paper's Table 4 start
@@ -144,12 +144,13 @@ class Rig:
         open(self.log_path, "w").close()
         self.daemon_log = open(self.log_path, "a+")
         self.daemon = subprocess.Popen(
-            [args.daemon, "--lcm-url", URL, "--can", "vcan0", "--speed", "30",
+            [args.daemon, "--lcm-url", URL, "--can", "vcan0",
+             *trust(args.daemon, self.out), "--speed", "30",
              "--accel", "60",
              # emulated CPU, busy host: heartbeats come late
              "--heartbeat-timeout", "1500", *daemon_args],
             stdout=self.daemon_log, stderr=subprocess.STDOUT)
-        self.lc = lcm.LCM(URL)
+        self.lc = signing_lcm(URL)
         self.watch = DaemonWatch(self.lc, cf)
         self.feeds = []
         self.t0 = time.time()

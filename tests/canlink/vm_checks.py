@@ -3,6 +3,7 @@ publishes on LCM, collected as it arrives, a sensor that keeps scanning
 (ScanFeed), how far a pose is from a goal, what a candump capture says
 about the drives, and stopping the daemon and the drives. (The importer
 puts tools/ and tests/daemon/ on sys.path.)"""
+import os
 import subprocess
 import threading
 import time
@@ -62,6 +63,48 @@ class DaemonWatch:
         return False
 
 
+# The senders the VM tests sign as (qrtpland --keys): trust() makes their
+# keys; from then on signing_lcm() and every ScanFeed sign what they publish.
+_SIGNERS = None
+SENDERS = (("op", "operator"), ("s0", "sensor"), ("s1", "sensor"),
+           ("front", "sensor"), ("side", "sensor"), ("rogue", "sensor"))
+
+
+def trust(daemon_bin, out):
+    """Keys for SENDERS in out/keys; returns qrtpland's --keys arguments."""
+    import qrtauth  # needs the generated types, which test_exec_vm lacks
+    key_dir = os.path.join(out, "keys")
+    sign_as(qrtauth.gen_keys(daemon_bin, key_dir, SENDERS))
+    return ["--keys", key_dir]
+
+
+def sign_as(signers):
+    """From now on signing_lcm() and every ScanFeed sign with these
+    qrtauth.Signer keys."""
+    global _SIGNERS
+    _SIGNERS = list(signers)
+
+
+class SigningLCM:
+    """An lcm.LCM whose publish() signs as the trusted senders do."""
+
+    def __init__(self, url):
+        import qrtauth
+        self._lc = lcm.LCM(url)
+        self._signed = qrtauth.SignedPublisher(self._lc, _SIGNERS)
+
+    def publish(self, channel, data):
+        self._signed.publish(channel, data)
+
+    def __getattr__(self, name):
+        return getattr(self._lc, name)
+
+
+def signing_lcm(url):
+    """An LCM instance that signs (after trust()), else a plain one."""
+    return SigningLCM(url) if _SIGNERS else lcm.LCM(url)
+
+
 class ScanFeed:
     """A sensor that keeps scanning: the current scene as a range scan
     (conftest.scan_from_points with the generated types in `types`),
@@ -78,7 +121,7 @@ class ScanFeed:
                  channel="QRT_SCAN"):
         self.types, self.sensor, self.period = types, sensor, period
         self.channel = channel
-        self.lc = lcm.LCM(url)
+        self.lc = signing_lcm(url)
         self.lock = threading.Lock()  # the message, the instance, the stamps
         self.published = 0
         self.last_utime = None  # stamp of the newest scan published (us)

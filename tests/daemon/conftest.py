@@ -19,6 +19,7 @@ sys.path.insert(0, os.environ.get("QRT_LCMTYPES_PY",
 import lcm  # noqa: E402
 from qrtplan import (daemon_status_t, joint_state_t, plan_request_t,  # noqa: E402
                      plan_t, range_scan_t)
+import qrtauth  # noqa: E402
 
 DAEMON = os.environ.get("QRTPLAND_BIN", os.path.join(REPO, "build", "bin", "qrtpland"))
 _ports = itertools.count(7700 + (os.getpid() % 200) * 5)
@@ -60,10 +61,12 @@ def request(goal, kind=0, start=None, request_id=1):
 
 
 class Client:
-    """An LCM peer on the daemon's URL that collects what it publishes."""
+    """An LCM peer on the daemon's URL that collects what it publishes.
+    With signers (qrtauth.Signer) it signs what it publishes."""
 
-    def __init__(self, url):
+    def __init__(self, url, signers=None):
         self.lc = lcm.LCM(url)
+        self.signed = qrtauth.SignedPublisher(self.lc, signers) if signers else None
         self.plans, self.status = [], []
         self.lc.subscribe("QRT_PLAN", lambda c, d: self.plans.append(
             (time.time(), plan_t.decode(d))))
@@ -71,7 +74,11 @@ class Client:
             daemon_status_t.decode(d)))
 
     def publish(self, channel, msg):
-        self.lc.publish(channel, msg if isinstance(msg, bytes) else msg.encode())
+        data = msg if isinstance(msg, bytes) else msg.encode()
+        if self.signed:
+            self.signed.publish(channel, data)
+        else:
+            self.lc.publish(channel, data)
 
     def pump(self, seconds):
         end = time.time() + seconds
@@ -150,10 +157,17 @@ class Daemon:
 def daemon(tmp_path):
     started = []
 
-    def start(*args, url_options=RECV_BUF):
+    def start(*args, url_options=RECV_BUF, keys=None):
+        """keys: (name, role) pairs: the daemon trusts them (--keys) and
+        the client signs with them."""
+        signers = None
+        if keys:
+            key_dir = str(tmp_path / f"keys{len(started)}")
+            signers = qrtauth.gen_keys(DAEMON, key_dir, keys)
+            args = (*args, "--keys", key_dir)
         d = Daemon(tmp_path, *args, url_options=url_options)
         started.append(d)
-        c = Client(d.url)
+        c = Client(d.url, signers)
         # its first status comes after it has subscribed: from then on
         # nothing published here is missed (slow starts under ASan)
         assert c.wait_status(lambda s: True, timeout=30) is not None, d.text()

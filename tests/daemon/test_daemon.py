@@ -159,7 +159,8 @@ def test_the_log_says_what_the_daemon_made_of_its_options(daemon):
                   "--limits-deg", "-180,180,-10,170,-150,130",
                   "--can", "qrt_no_such_bus", "--can-nodes", "4,5,6",
                   "--counts-per-deg", "1000,2000,-500", "--speed", "40,10,20",
-                  "--accel", "80,20,40", "--offset-counts", "5000,-20000,7")
+                  "--accel", "80,20,40", "--offset-counts", "5000,-20000,7",
+                  keys=[("op", "operator")])
     text = d.text()
     assert ("arm: links 0.1,0.4,0.45 m, radii 0.03,0.025,0.02 m, limits "
             "-180..180 -10..170 -150..130 deg") in text, text
@@ -205,6 +206,7 @@ def test_bad_messages_get_a_status_and_the_daemon_keeps_serving(daemon):
     st = c.wait_status(lambda s: s.scans_rejected >= 7 and s.requests_rejected >= 1)
     assert st is not None and st.scans_rejected >= 7, d.text()
     assert st.requests_rejected >= 1
+    assert c.wait_status(lambda s: s.joint_states_rejected == 1) is not None
     log = d.text()
     for what in ("wrong type fingerprint", "claims 2147483647 returns",
                  "non-finite", "not a unit quaternion", "joint state refused",

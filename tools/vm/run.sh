@@ -138,9 +138,13 @@ prepare_initramfs() {
     local i=0 m dst
     # virtio + 9p to reach the host's files, then can, can-raw, can-dev,
     # vcan in that order (vcan needs can-dev); can-bcm for python-can's
-    # periodic sends (the SYNC producer of python-canopen)
+    # periodic sends (the SYNC producer of python-canopen); virtio-rng for
+    # the host's entropy: without it the emulated kernel's random pool
+    # starts empty and libsodium (qrtpland, PyNaCl) waits in getrandom()
+    # until it fills, for minutes under emulation
     for m in $(module_list "$moddir" virtio virtio_ring virtio_pci netfs fscache \
-        9pnet 9pnet_virtio 9p can can_raw can_bcm can_dev vcan); do
+        9pnet 9pnet_virtio 9p can can_raw can_bcm can_dev vcan rng_core \
+        virtio_rng); do
         i=$((i + 1))
         dst=$ird/modules/$(printf %02d "$i")-$(basename "$m")
         cp "$moddir/$m" "$dst"
@@ -188,6 +192,7 @@ timeout "${QRT_VM_TIMEOUT:-900}" "$qemu" -accel tcg -cpu max -m 1024 -smp 2 \
     -initrd "$vmdir/initramfs.cpio.gz" \
     -append "console=ttyS0 quiet panic=-1 qrt_run=$run" \
     -virtfs local,path=/,mount_tag=host,security_model=passthrough,multidevs=remap \
+    -device virtio-rng-pci \
     </dev/null | tr -d '\r' | sed 's/\x1b\[[0-9;?]*[a-zA-Z]//g' |
     grep -v -E '^\s*$' >&2 || true
 end=$(date +%s.%N)
