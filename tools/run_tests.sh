@@ -10,7 +10,7 @@
 #      (ports/mps2-an500) running the core's tests, the Table 4 plan and
 #      the servo side's tests (codec, drive firmware, CiA 402 master) on
 #      qemu-system-arm, compared with the host's bit for bit,
-#   5. the README's memory table checked against the built objects,
+#   5. the memory table of docs/embedded.md checked against the built objects,
 #   6. the libFuzzer targets (scene/PCD readers, CAN frames, LCM messages).
 # Ends with one "N passed, M failed" line; exits non-zero on any failure.
 set -uo pipefail
@@ -99,8 +99,8 @@ else
     failed=$((failed + 1))
 fi
 
-echo "== memory budget: the README's table against the built objects"
-if tools/memory_budget.sh --check README.md; then
+echo "== memory budget: docs/embedded.md's table against the built objects"
+if tools/memory_budget.sh --check docs/embedded.md; then
     passed=$((passed + 1))
 else
     failed=$((failed + 1))
