@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
-"""The README's benchmark tables from several runs: Table 5 and the OMPL race.
+"""The benchmark tables of docs/benchmarks.md from several runs: Table 5 and the OMPL race.
 
 One run of either benchmark moves with the machine's load (Table 5's cells by
-10-30 %, RRTConnect's medians by up to 1.5x), so the README quotes several
+10-30 %, RRTConnect's medians by up to 1.5x), so docs/benchmarks.md quotes several
 runs, alternated: for each run, build/bin/bench_table5, then
 tools/bench_compare.py in turn, with --replanning and with --cold. Then it
-prints (and writes to OUT/summary.md) the tables as the README gives them:
+prints (and writes to OUT/summary.md) the tables as docs/benchmarks.md gives them:
 
 * Table 5: each cell's median over the runs of its median time, and the
   speed-up over the paper's seconds;

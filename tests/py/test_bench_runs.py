@@ -1,4 +1,4 @@
-"""tools/bench_runs.py summarises runs into the README's tables: its medians,
+"""tools/bench_runs.py summarises runs into docs/benchmarks.md's tables: its medians,
 ranges, oracle verdict and scene list must be the runs' own, on made-up runs
 whose answers are known."""
 import csv
