@@ -1,4 +1,4 @@
-"""Every failure mode of design.md section 5: a plan status for well-formed
+"""Every failure mode of docs/spec.md §CLI: a plan status for well-formed
 scenes, one line on stderr and exit 2 for input qrtplan cannot use; never a
 crash or a hang."""
 import json
