@@ -53,7 +53,7 @@ static void usage(FILE *out)
         "  --counts-per-deg X[,Y,Z]  scale behind the default position limits\n"
         "                        and --start-deg, one for every joint or one\n"
         "                        each (the drives past the third take Z)\n"
-        "                        (default 1000; limits are design.md's joint\n"
+        "                        (default 1000; limits are the arm's joint\n"
         "                        limits [-40,180] and [-180,140] deg for "
         "sigma\n"
         "                        and eta; alpha wraps, so its drive turns\n"
@@ -181,7 +181,7 @@ int main(int argc, char **argv)
     static struct drive drives[MAX_DRIVES];
     struct drive_config cfg[MAX_DRIVES];
     unsigned nodes[MAX_DRIVES] = {1, 2, 3}, n_nodes = 3, i;
-    /* design.md section 3 joint limits, degrees */
+    /* the arm's joint limits (docs/spec.md section Arm), degrees */
     static const double lim_deg[3][2] = {{-180, 180}, {-40, 180}, {-180, 140}};
     double start_deg[3] = {0, 0, 0};
     const char *iface = "vcan0";
@@ -316,7 +316,7 @@ int main(int argc, char **argv)
             (int32_t)(offset_counts[k] + lim_deg[k][0] * counts_per_deg[k]);
         cfg[i].limit_max =
             (int32_t)(offset_counts[k] + lim_deg[k][1] * counts_per_deg[k]);
-        if (k == 0) { /* alpha wraps (design.md section 3): no end stops */
+        if (k == 0) { /* alpha wraps (docs/spec.md section Arm): no end stops */
             cfg[i].limit_min = INT32_MIN;
             cfg[i].limit_max = INT32_MAX;
         }

@@ -82,7 +82,7 @@ def make_scenes(out, seeds, qrtplan, smoke):
 def ik_branches(arm, xyz):
     """Every joint solution (degrees, within the limits) that puts the tip
     at xyz: alpha toward the point or away from it, the elbow either way
-    (design.md section 3), each confirmed by the oracle's own kinematics."""
+    (docs/spec.md §Kinematics), each confirmed by the oracle's own kinematics."""
     l1, l2, l3 = arm.links
     x, y, z = xyz
     out = []

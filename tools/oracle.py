@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
 """Independent safety oracle for qrtplan plans.
 
-Shares no code with the planner: forward kinematics from design.md section 3,
-exact point-to-segment distances in numpy, and the path sampled at no more
-than 0.1 degree per joint between waypoints (alpha the short way round, its
-step taken in (-180, 180]). A configuration collides when any point is
-closer than link_radius + margin to a link (strict <).
+Shares no code with the planner: forward kinematics from docs/spec.md
+§Kinematics, exact point-to-segment distances in numpy, and the path sampled
+at no more than 0.1 degree per joint between waypoints (alpha the short way
+round, its step taken in (-180, 180]). A configuration collides when any
+point is closer than link_radius + margin to a link (strict <).
 
     python tools/oracle.py SCENE.json PLAN.json   # exit 0 safe, 1 not
 

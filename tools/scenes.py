@@ -1,6 +1,6 @@
 """Seeded random scenes for qrtplan's tests: spheres, boxes, walls, and
 confined scenes (the arm inside a box with openings, a tunnel through a wall,
-a shelf). Every scene is a dict in the scene format of design.md section 5."""
+a shelf). Every scene is a dict in the scene format of docs/spec.md §Scene."""
 import math
 
 import numpy as np

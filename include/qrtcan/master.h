@@ -10,9 +10,9 @@
  * that over SocketCAN; the tests do it against the simulated drives.
  *
  * Motion between waypoints is a straight line in joint space, as the
- * planner's guarantee assumes (design.md section 4): for each segment the
- * master gives every drive a trapezoidal profile scaled by that joint's
- * share of the move (profile velocity, acceleration and deceleration by
+ * planner's guarantee assumes (docs/spec.md section Guarantee): for each
+ * segment the master gives every drive a trapezoidal profile scaled by that
+ * joint's share of the move (profile velocity, acceleration and deceleration by
  * SDO), so all joints start and finish together and the arm stays on the
  * segment up to the drives' following error. Alpha moves the short way
  * round; its drive position is kept continuous (no jump at +-180 degrees).
@@ -40,8 +40,9 @@ struct qrtcan_master_config {
     struct qrtcan_scale scale[QRTCAN_JOINTS];
     double max_speed_deg_s[QRTCAN_JOINTS];  /* per joint (default 30) */
     double max_accel_deg_s2[QRTCAN_JOINTS]; /* per joint (default 60) */
-    /* [joint][lo, hi] in degrees: no path leaves them (default design.md
-     * section 3's). Alpha wraps, and is not limited, iff [-180, 180]. */
+    /* [joint][lo, hi] in degrees: no path leaves them (default the arm's of
+     * docs/spec.md section Arm). Alpha wraps, and is not limited, iff
+     * [-180, 180]. */
     double limit_deg[QRTCAN_JOINTS][2];
     uint32_t sync_period_us;      /* SYNC + RPDO cycle (default 10 ms) */
     uint32_t master_heartbeat_us; /* our heartbeat period (100 ms) */

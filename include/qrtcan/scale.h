@@ -1,6 +1,7 @@
 /* Joint degrees <-> drive position counts, one linear scale per joint:
  * counts = offset + round(deg * counts_per_deg). The drive knows only
- * counts; the planner only degrees (design.md: degrees at every interface).
+ * counts; the planner only degrees (docs/spec.md section Conventions:
+ * degrees at every interface).
  */
 #ifndef QRTCAN_SCALE_H
 #define QRTCAN_SCALE_H

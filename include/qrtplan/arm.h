@@ -1,5 +1,6 @@
 /* The paper's 3-DoF arm: geometry, joint limits, forward and inverse
- * kinematics (design.md section 3). Angles are degrees at this interface. */
+ * kinematics (docs/spec.md sections Arm, Kinematics). Angles are degrees at
+ * this interface. */
 #ifndef QRTPLAN_ARM_H
 #define QRTPLAN_ARM_H
 
@@ -15,7 +16,7 @@ struct qrt_arm {
     double limit_deg[3][2];  /* [joint][lo, hi]; alpha wraps iff [-180, 180] */
 };
 
-/* Table 1 of the paper, radii 0.02 m, limits of design.md section 3. */
+/* Table 1 of the paper, radii 0.02 m, limits of docs/spec.md section Arm. */
 void qrt_arm_default(struct qrt_arm *arm);
 
 /* QRT_OK, or QRT_E_INVALID for non-finite, negative or zero lengths,

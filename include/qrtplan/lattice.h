@@ -3,9 +3,9 @@
  * Node (ia, is, ie) sits at joints (lo_a + ia*g, lo_s + is*g, lo_e + ie*g).
  * Its cell box is the node plus or minus h = g/2 + cspace_margin in every
  * joint. The mask marks a node blocked when any configuration in its cell
- * box collides (conservative raster, design.md section 4): every straight
- * move between two free 26-neighbours runs through their two boxes only, so
- * it is safe.
+ * box collides (conservative raster, docs/spec.md section Lattice): every
+ * straight move between two free 26-neighbours runs through their two boxes
+ * only, so it is safe.
  */
 #ifndef QRTPLAN_LATTICE_H
 #define QRTPLAN_LATTICE_H

@@ -39,8 +39,8 @@ struct qrt_params {
     int simplify;             /* 1: shortcut the lattice path */
 };
 
-/* design.md defaults: margin 0.01 m, C-space margin 0, 5 degrees, A*,
- * simplification on. */
+/* The defaults of docs/spec.md: margin 0.01 m, C-space margin 0, 5 degrees,
+ * A*, simplification on. */
 void qrt_params_default(struct qrt_params *params);
 
 enum qrt_target_kind { QRT_TARGET_JOINTS = 0, QRT_TARGET_XYZ = 1 };

@@ -18,7 +18,7 @@ enum qrt_err {
                            the library (qrt_abi_message says which) */
 };
 
-/* The outcome of a plan (design.md section 5). */
+/* The outcome of a plan (docs/spec.md section Statuses). */
 enum qrt_plan_status {
     QRT_STATUS_OK = 0,
     QRT_STATUS_NO_PATH,

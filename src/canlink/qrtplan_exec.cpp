@@ -49,7 +49,7 @@ const char *kUsage =
     "  --timeout S          give up after S seconds (120)\n"
     "  --limits-deg a0,a1,s0,s1,e0,e1  this arm's joint limits; a plan\n"
     "                       with a waypoint outside them is refused\n"
-    "                       before the bus opens (design.md section 3:\n"
+    "                       before the bus opens (docs/spec.md section Arm:\n"
     "                       -180,180,-40,180,-180,140; alpha wraps only\n"
     "                       with -180,180)\n"
     "  --heartbeat-timeout MS  a drive silent this long is lost (300)\n"

@@ -75,7 +75,7 @@ void qrtcan_master_config_default(struct qrtcan_master_config *cfg)
         cfg->max_speed_deg_s[j] = 30.0;
         cfg->max_accel_deg_s2[j] = 60.0;
     }
-    cfg->limit_deg[0][0] = -180.0; /* design.md section 3 */
+    cfg->limit_deg[0][0] = -180.0; /* docs/spec.md section Arm */
     cfg->limit_deg[0][1] = 180.0;
     cfg->limit_deg[1][0] = -40.0;
     cfg->limit_deg[1][1] = 180.0;
@@ -402,7 +402,7 @@ int qrtcan_limits_valid(const double (*lim)[2])
 }
 
 /* Alpha wraps (and has no limit) iff its limits are the whole circle, as
- * in the planner (design.md section 3). */
+ * in the planner (docs/spec.md section Arm). */
 static int joint_wraps(const struct qrtcan_master_config *cfg, int j)
 {
     return j == 0 && cfg->limit_deg[0][0] == -180.0 &&

@@ -341,7 +341,8 @@ static int check_point(const double *p, long i, char *err, size_t err_len)
     if (isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]))
         return 0;
     /* organised clouds (is_dense false) mark pixels without a return so;
-     * design.md has the reader refuse them rather than guess */
+     * the reader refuses them rather than guess (docs/spec.md section
+     * Scene) */
     snprintf(err, err_len,
              "point %ld is not finite (NaN or Inf; a cloud that marks "
              "missing returns with NaN needs them removed first, e.g. "

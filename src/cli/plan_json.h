@@ -1,4 +1,4 @@
-/* Writing plans (design.md section 5) and masks as JSON. */
+/* Writing plans and masks as JSON (docs/spec.md sections Plan and Mask). */
 #ifndef QRT_CLI_PLAN_JSON_H
 #define QRT_CLI_PLAN_JSON_H
 

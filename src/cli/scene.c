@@ -167,20 +167,29 @@ static int get_number(const struct json *obj, const char *key, double lo,
     return 0;
 }
 
+/* Refuses a key of obj that is not in allowed (NULL-terminated), naming it
+ * (cut to 64 bytes, so that the list fits) and every valid key. */
 static int only_keys(const struct json *obj, const char *what,
                      const char *const *allowed, char *err, size_t err_len)
 {
-    size_t i;
+    size_t i, used;
     for (i = 0; i < obj->count; i++) {
         const char *const *a;
         for (a = allowed; *a; a++)
             if (strcmp(obj->keys[i], *a) == 0)
                 break;
-        if (!*a) {
-            snprintf(err, err_len, "unknown field \"%s\" in %s", obj->keys[i],
-                     what);
-            return -1;
+        if (*a)
+            continue;
+        snprintf(err, err_len,
+                 "unknown field \"%.64s\" in %s (valid: ", obj->keys[i], what);
+        for (a = allowed; *a; a++) {
+            used = strlen(err);
+            snprintf(err + used, err_len - used, "%s%s",
+                     a == allowed ? "" : ", ", *a);
         }
+        used = strlen(err);
+        snprintf(err + used, err_len - used, ")");
+        return -1;
     }
     return 0;
 }

@@ -1,5 +1,5 @@
-/* Scene files, version 1 (design.md section 5): the arm, margins, lattice,
- * obstacle points (inline and/or a PCD file), start and goal. */
+/* Scene files, version 1 (docs/spec.md section Scene): the arm, margins,
+ * lattice, obstacle points (inline and/or a PCD file), start and goal. */
 #ifndef QRT_CLI_SCENE_H
 #define QRT_CLI_SCENE_H
 

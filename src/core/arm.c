@@ -1,4 +1,4 @@
-/* Kinematics of the paper's arm (design.md section 3). */
+/* Kinematics of the paper's arm (docs/spec.md sections Arm, Kinematics). */
 #include "qrtplan/arm.h"
 
 #include <math.h>

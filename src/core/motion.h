@@ -9,7 +9,7 @@
 #include "qrtplan/points.h"
 
 /* Joint step from a to b in degrees: alpha the short way round, in
- * (-180, 180], when the lattice wraps (design.md section 4). */
+ * (-180, 180], when the lattice wraps (docs/spec.md section Guarantee). */
 void qrt_motion_delta(const struct qrt_lattice *lat, const double a_deg[3],
                       const double b_deg[3], double d_deg[3]);
 

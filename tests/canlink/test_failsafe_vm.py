@@ -91,7 +91,7 @@ FAR = [[2.5, 2.5, 0.0]]
 MAX_SCAN_AGE = 0.5  # the daemon's default, given explicitly where it matters
 FEED_PERIOD = 0.1
 COUNTS_PER_DEG = 1000.0  # servo_sim's and qrtpland's default
-# design.md section 3: sigma and eta's limits (alpha wraps: none), in counts
+# docs/spec.md §Arm: sigma and eta's limits (alpha wraps: none), in counts
 LIMITS = {2: (-40, 180), 3: (-180, 140)}
 EMCY_HEARTBEAT = 0x8130
 REACH = 0.1  # clearances are exact below this (m), at least this above

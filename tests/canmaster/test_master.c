@@ -312,8 +312,8 @@ static int follow(const double (*wp)[3], const double (*unwrapped)[3], int n,
     return 0;
 }
 
-/* Drives at 0 and the master brought up with cfg (design.md's defaults
- * where NULL). */
+/* Drives at 0 and the master brought up with cfg (the defaults, the arm of
+ * docs/spec.md section Arm, where NULL). */
 static void power_up(const struct qrtcan_master_config *given)
 {
     struct qrtcan_master_config cfg;

@@ -115,10 +115,10 @@ ARM_LIMITS = [[-180, 180], [-10, 170], [-150, 130]]  # sigma >= -10
 
 
 def test_the_arm_from_the_options(daemon):
-    """Another arm's links and limits, and a goal as a point: with design.md's
-    arm the Table 4 detour dips to sigma -20 (outside these limits), and the
-    goal's joints would put this arm's tip elsewhere: the oracle, given this
-    arm, fails either."""
+    """Another arm's links and limits, and a goal as a point: with the default
+    arm (docs/spec.md §Arm) the Table 4 detour dips to sigma -20 (outside
+    these limits), and the goal's joints would put this arm's tip elsewhere:
+    the oracle, given this arm, fails either."""
     d, c = daemon("--links", ",".join(map(str, ARM_LINKS)),
                   "--limits-deg", ",".join(str(x) for lim in ARM_LIMITS
                                            for x in lim))

@@ -1,4 +1,4 @@
-"""Every failure mode of design.md section 5: a plan status for well-formed
+"""Every failure mode of docs/spec.md §CLI: a plan status for well-formed
 scenes, one line on stderr and exit 2 for input qrtplan cannot use; never a
 crash or a hang."""
 import json
@@ -71,8 +71,13 @@ def test_malformed_json(qrtplan, tmp_path, text, words):
     (with_(grid_deg=7), ["grid_deg"]),  # 7 does not divide 360
     (with_(arm={"links_m": [0.1, 0.2]}), ["links_m"]),
     (with_(arm={"limits_deg": [[-180, 180], [90, 0], [-180, 140]]}), ["limits"]),
-    (with_(arm={"elbow": 1}), ["elbow"]),
-    (with_(colour="red"), ["colour"]),
+    # an unknown field is named, and so is every valid one
+    (with_(arm={"elbow": 1}),
+     ['"elbow" in arm (valid: links_m, link_radius_m, limits_deg)']),
+    (with_(colour="red"),
+     ['"colour" in the scene (valid: version, name, comment, arm, margin_m, '
+      'cspace_margin_deg, grid_deg, points, points_file, start, goal)']),
+    (with_(start={"joints": [0, 0, 0]}), ['"joints" in start (valid: joints_deg, xyz_m)']),
     (with_(start={"joints_deg": [0, -60, 0]}), ["outside the joint limits"]),
     (with_(goal={"joints_deg": [0, 0, 150]}), ["outside the joint limits"]),
     (with_(start={"joints_deg": [190, 0, 0]}), ["outside the joint limits"]),

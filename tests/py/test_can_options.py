@@ -159,7 +159,8 @@ def run_exec_with_limits(tmp_path, limits, waypoints):
 
 
 @pytest.mark.parametrize("limits,waypoints,refused", [
-    # sigma narrowed to 90: a plan made for design.md's 180 is refused
+    # sigma narrowed to 90: a plan made for the default arm's 180
+    # (docs/spec.md §Arm) is refused
     ("-180,180,-40,90,-180,140", "[[0, 0, 0], [0, 120, 0]]", "waypoint 1"),
     ("-180,180,-40,90,-180,140", "[[0, 0, 0], [0, 90, 0]]", None),
     # alpha not wrapping: 160 -> -160 is a 320 degree turn, not 40

@@ -104,8 +104,8 @@ def test_binary_compressed_reads_as_the_same_cloud(qrtplan, tmp_path, name,
 def test_an_organised_cloud_with_nan_pixels_is_refused_with_the_remedy(
         qrtplan, tmp_path):
     """A depth camera's organised cloud marks pixels without a return with
-    NaN (is_dense false). design.md has the reader refuse NaN; the message
-    says where and what to do."""
+    NaN (is_dense false). docs/spec.md §Scene has the reader refuse NaN; the
+    message says where and what to do."""
     rng = np.random.default_rng(7)
     xyz = rng.uniform(0.3, 0.6, (4 * 6, 3)).astype(np.float32)
     xyz[9] = np.nan

@@ -1,7 +1,7 @@
 """Safety over many seeded random scenes (seven families, one of them with
 the arm's radii, margins, grid, C-space margin and limits varied): every ok plan, sampled at 0.1
 degree per joint by the independent oracle, stays in the limits and collides
-with nothing (design.md section 4). Every other scene is planned with
+with nothing (docs/spec.md §Guarantee). Every other scene is planned with
 `--as-read` (qrt_planner_plan_now), so the oracle checks both ways."""
 import collections
 import json

@@ -1,6 +1,6 @@
 /* An independent reference of the arm for the C tests: forward kinematics
- * and capsule-point distance written from design.md section 3, sharing no
- * code with the core. */
+ * and capsule-point distance written from docs/spec.md sections Kinematics
+ * and Collision, sharing no code with the core. */
 #ifndef QRT_TEST_REF_ARM_H
 #define QRT_TEST_REF_ARM_H
 

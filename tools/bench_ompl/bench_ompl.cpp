@@ -1,7 +1,7 @@
 // qrtplan against OMPL on the same scenes, start, goal and collision rule
-// (design.md section 4: capsule links vs points, distance < radius + margin
-// collides), interleaved repetition by repetition so that machine noise hits
-// both alike.
+// (docs/spec.md section Collision: capsule links vs points, distance <
+// radius + margin collides), interleaved repetition by repetition so that
+// machine noise hits both alike.
 //
 //   bench_ompl [--repeats R] [--time-limit S] [--csv OUT]
 //              [--replanning | --cold [--evict-mib M]] SCENE.json...
@@ -22,12 +22,12 @@
 // planner then starts with its own code and data in cache, and the scan.
 //
 // OMPL side: alpha is an SO2 (it wraps, and OMPL interpolates it the short
-// way, as design.md asks), sigma and eta a 2-D real vector; states are
-// checked against the points through a dense voxel index (5 cm cells, each
-// listing its points; a link looks only at the cells its capsule's box
-// touches); motions are checked discretely every 0.25 degree of joint
-// motion (OMPL's DiscreteMotionValidator). Planners: RRTConnect and PRM
-// (time to first solution: building the index and solve()), RRT* (path
+// way, as docs/spec.md section Guarantee asks), sigma and eta a 2-D real
+// vector; states are checked against the points through a dense voxel index
+// (5 cm cells, each listing its points; a link looks only at the cells its
+// capsule's box touches); motions are checked discretely every 0.25 degree
+// of joint motion (OMPL's DiscreteMotionValidator). Planners: RRTConnect and
+// PRM (time to first solution: building the index and solve()), RRT* (path
 // quality within the time limit); RRTConnect and RRT* with a deadline that
 // starts no thread. Every path is written to the CSV as waypoints in degrees,
 // for the independent oracle (tools/oracle.py, run by tools/bench_compare.py).
