@@ -2,6 +2,7 @@
 
 #include <sodium.h>
 
+#include "decode.hpp"
 #include "qrtplan/authenticated_message_t.hpp"
 
 namespace qrt
@@ -18,20 +19,6 @@ const char *refusal_name(AuthRefusal r)
 namespace
 {
 
-uint64_t be_u64(const uint8_t *b)
-{
-    uint64_t v = 0;
-    for (int i = 0; i < 8; i++)
-        v = v << 8 | b[i];
-    return v;
-}
-
-uint32_t be_u32(const uint8_t *b)
-{
-    return uint32_t(b[0]) << 24 | uint32_t(b[1]) << 16 | uint32_t(b[2]) << 8 |
-           uint32_t(b[3]);
-}
-
 // An LCM string at *pos: int32 length counting the NUL, the bytes, the NUL;
 // at most max_chars characters and no NUL inside.
 bool take_string(const uint8_t *data, size_t size, size_t *pos,
@@ -39,7 +26,7 @@ bool take_string(const uint8_t *data, size_t size, size_t *pos,
 {
     if (size - *pos < 4)
         return false;
-    uint32_t len = be_u32(data + *pos);
+    uint32_t len = lcm_u32(data + *pos);
     if (len < 1 || len - 1 > max_chars || len > size - *pos - 4)
         return false;
     const char *s = reinterpret_cast<const char *>(data + *pos + 4);
@@ -55,7 +42,7 @@ bool take_string(const uint8_t *data, size_t size, size_t *pos,
 bool is_authenticated_message(const uint8_t *data, size_t size)
 {
     return size >= 8 &&
-           be_u64(data) ==
+           lcm_u64(data) ==
                uint64_t(qrtplan::authenticated_message_t::getHash());
 }
 
@@ -79,8 +66,8 @@ bool parse_authenticated_message(const uint8_t *data, size_t size,
         *why = "truncated before the payload";
         return false;
     }
-    out->counter = int64_t(be_u64(data + pos));
-    int32_t n = int32_t(be_u32(data + pos + 8));
+    out->counter = int64_t(lcm_u64(data + pos));
+    int32_t n = int32_t(lcm_u32(data + pos + 8));
     pos += 12;
     // exactly the payload, the nonce and the MAC remain: nothing
     // unauthenticated may ride along after it

@@ -1,5 +1,7 @@
 #include "ingest.hpp"
 
+#include "decode.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -8,17 +10,6 @@
 
 namespace qrt
 {
-
-namespace
-{
-
-int32_t get_i32(const uint8_t *p)
-{
-    return int32_t(uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 |
-                   uint32_t(p[2]) << 8 | uint32_t(p[3]));
-}
-
-} // namespace
 
 bool scan_claims_fit(const void *buf, int size, long max_returns,
                      std::string *why)
@@ -31,7 +22,7 @@ bool scan_claims_fit(const void *buf, int size, long max_returns,
         *why = "truncated (" + std::to_string(size) + " bytes)";
         return false;
     }
-    int32_t len = get_i32(b + pos);
+    int32_t len = int32_t(lcm_u32(b + pos));
     if (len < 1 || len > size) {
         *why = "bad sensor_id length";
         return false;
@@ -41,7 +32,7 @@ bool scan_claims_fit(const void *buf, int size, long max_returns,
         *why = "truncated (" + std::to_string(size) + " bytes)";
         return false;
     }
-    int32_t n = get_i32(b + pos);
+    int32_t n = int32_t(lcm_u32(b + pos));
     pos += 4;
     if (n < 0 || long(n) > max_returns) {
         *why = "claims " + std::to_string(n) + " returns (limit " +
