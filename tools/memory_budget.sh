@@ -76,7 +76,7 @@ table() {
     done
 }
 
-begin='<!-- memory-budget:begin (tools/memory_budget.sh --update README.md) -->'
+begin='<!-- memory-budget:begin (tools/memory_budget.sh --update docs/embedded.md) -->'
 end='<!-- memory-budget:end -->'
 case ${1:-} in
 --update | --check)
