@@ -69,9 +69,8 @@ int qrt_planner_init_abi(struct qrt_planner *pl,
         if (arm->link_radius_m[k] > rmax)
             rmax = arm->link_radius_m[k];
     qrt_points_reset(&pl->points, arm_reach(arm) + rmax + params->margin_m);
-    pl->mask_stale = 1;
+    pl->mask_state = QRT_MASK_NONE;
     pl->cells_blocked = 0;
-    pl->lazy = pl->lazy_kept = 0;
     pl->lazy_clusters = 0;
     pl->lazy_raster = NULL;
     return QRT_OK;
@@ -80,17 +79,16 @@ int qrt_planner_init_abi(struct qrt_planner *pl,
 void qrt_planner_clear_points(struct qrt_planner *pl)
 {
     qrt_points_reset(&pl->points, pl->points.reach_m);
-    pl->mask_stale = 1;
-    pl->lazy_kept = 0;
+    pl->mask_state = QRT_MASK_NONE;
 }
 
 int qrt_planner_add_points(struct qrt_planner *pl, const double *xyz, long n)
 {
     int rc = qrt_points_add(&pl->points, xyz, n);
-    if (rc == QRT_OK && n > 0)
-        pl->mask_stale = 1;
-    if (n > 0)
-        pl->lazy_kept = 0;
+    /* points added: no mask is theirs yet; refused points leave a whole
+     * mask whole, but the kept clusters are given up all the same */
+    if (n > 0 && (rc == QRT_OK || pl->mask_state != QRT_MASK_WHOLE))
+        pl->mask_state = QRT_MASK_NONE;
     return rc;
 }
 
@@ -122,8 +120,7 @@ static void start_mask(struct qrt_planner *pl)
         for (is = 0; is < QRT_MAX_NS; is++)
             for (w = 0; w < QRT_ROW_WORDS; w++)
                 pl->mask.rows[ia][is][w] = 0;
-    pl->mask_stale = 1; /* until the whole mask is built */
-    pl->lazy_kept = 0;
+    pl->mask_state = QRT_MASK_NONE; /* until rows are built */
 }
 
 int qrt_planner_build_mask_begin(struct qrt_planner *pl)
@@ -178,8 +175,18 @@ int qrt_planner_build_mask_part(struct qrt_planner *pl, int part, int nparts)
 int qrt_planner_build_mask_end(struct qrt_planner *pl)
 {
     pl->cells_blocked = qrt_mask_count_blocked(&pl->mask);
-    pl->mask_stale = 0;
+    pl->mask_state = QRT_MASK_WHOLE;
     return QRT_OK;
+}
+
+enum qrt_mask_state qrt_planner_mask_state(const struct qrt_planner *pl)
+{
+    return pl->mask_state;
+}
+
+const struct qrt_mask *qrt_planner_mask(const struct qrt_planner *pl)
+{
+    return &pl->mask;
 }
 
 int qrt_planner_build_mask(struct qrt_planner *pl)
@@ -221,7 +228,7 @@ static int node_blocked(void *ctx, const int ijk[3])
 static int motion_free(struct qrt_planner *pl, const double a[3],
                        const double b[3])
 {
-    if (pl->lazy)
+    if (qrt_lazy_building(pl))
         return qrt_motion_free_asking(&pl->mask, node_blocked, pl, a, b);
     return qrt_motion_free_on_mask(&pl->mask, a, b);
 }
@@ -577,8 +584,8 @@ static int plan_swept(struct qrt_planner *pl, const struct qrt_target *start,
 }
 
 /* plan_swept for the calls that build only what they read: those leave
- * the mask partial whatever they did, so the next plain qrt_planner_plan
- * builds one first. */
+ * no whole mask whatever they did (a partial one stays kept), so the next
+ * plain qrt_planner_plan builds one first. */
 static int plan_swept_maskless(struct qrt_planner *pl,
                                const struct qrt_target *start,
                                const struct qrt_target *goal,
@@ -586,7 +593,8 @@ static int plan_swept_maskless(struct qrt_planner *pl,
 {
     if (!plan_swept(pl, start, goal, plan))
         return 0;
-    pl->mask_stale = 1;
+    if (pl->mask_state == QRT_MASK_WHOLE)
+        pl->mask_state = QRT_MASK_NONE;
     pl->cells_blocked = plan->cells_blocked = -1;
     return 1;
 }
@@ -596,7 +604,7 @@ static int plan_swept_maskless(struct qrt_planner *pl,
  * not fit beside the heap (the mask is then cleared and partial). */
 static int lazy_start(struct qrt_planner *pl, struct qrt_raster *r)
 {
-    int kept = pl->lazy_kept;
+    int kept = pl->mask_state == QRT_MASK_PARTIAL;
     if (!kept)
         start_mask(pl);
     qrt_raster_setup(r, &pl->mask, &pl->params.arm, pl->radius_m,
@@ -633,8 +641,7 @@ static int rows_from_clusters(struct qrt_planner *pl)
     if (!lazy_start(pl, &r))
         return 0;
     qrt_lazy_build_rows(pl, pl->check_rows);
-    qrt_lazy_end(pl);
-    pl->lazy_kept = 1;
+    (void)qrt_lazy_end(pl);
     return 1;
 }
 
@@ -651,15 +658,12 @@ static void build_rows_along(struct qrt_planner *pl,
     }
 }
 
-int qrt_planner_plan_straight(struct qrt_planner *pl,
-                              const struct qrt_target *start,
-                              const struct qrt_target *goal,
-                              struct qrt_plan *plan)
+/* qrt_planner_plan_straight on valid targets: 1 with *plan the straight
+ * motion when it is proved free, else 0. */
+static int straight_plan(struct qrt_planner *pl, const struct qrt_target *start,
+                         const struct qrt_target *goal, struct qrt_plan *plan)
 {
     double wp[2][3];
-    int rc;
-    if ((rc = check_targets(pl, start, goal)) != QRT_OK)
-        return rc;
     if (start->kind != QRT_TARGET_JOINTS || goal->kind != QRT_TARGET_JOINTS ||
         !pl->params.simplify || pl->points.dropped > 0)
         return 0;
@@ -679,6 +683,19 @@ int qrt_planner_plan_straight(struct qrt_planner *pl,
     copy_joints(plan->goal_deg, wp[1]);
     set_straight_plan(pl, plan, wp[0], wp[1]);
     return 1;
+}
+
+int qrt_planner_plan_straight(struct qrt_planner *pl,
+                              const struct qrt_target *start,
+                              const struct qrt_target *goal,
+                              struct qrt_plan *plan, int *straight)
+{
+    int rc;
+    *straight = 0;
+    if ((rc = check_targets(pl, start, goal)) != QRT_OK)
+        return rc;
+    *straight = straight_plan(pl, start, goal, plan);
+    return QRT_OK;
 }
 
 /* qrt_planner_plan on valid targets and a mask that is built, or being
@@ -752,7 +769,7 @@ int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
     int rc;
     if ((rc = check_targets(pl, start, goal)) != QRT_OK)
         return rc;
-    if (pl->mask_stale)
+    if (pl->mask_state != QRT_MASK_WHOLE)
         return QRT_E_INVALID;
     if (!plan_swept(pl, start, goal, plan))
         plan_on_mask(pl, start, goal, plan);
@@ -772,9 +789,6 @@ static int plan_lazily(struct qrt_planner *pl, const struct qrt_target *start,
     if (qrt_lazy_end(pl)) { /* the heap needed the clusters' room */
         pl->cells_blocked = qrt_mask_count_blocked(&pl->mask);
         plan->cells_blocked = pl->cells_blocked;
-        pl->mask_stale = 0;
-    } else {
-        pl->lazy_kept = 1;
     }
     return 1;
 }
@@ -853,7 +867,7 @@ int qrt_planner_check_path(const struct qrt_planner *pl,
 {
     int rc;
     *first_blocked = -1;
-    if (pl->mask_stale)
+    if (pl->mask_state != QRT_MASK_WHOLE)
         return QRT_E_INVALID;
     rc = check_waypoints(pl, waypoints_deg, n);
     if (rc != QRT_OK)
@@ -884,8 +898,7 @@ static int check_segments_lazily(struct qrt_planner *pl,
             break;
         }
     }
-    qrt_lazy_end(pl);
-    pl->lazy_kept = 1;
+    (void)qrt_lazy_end(pl);
     return 1;
 }
 

@@ -9,7 +9,7 @@
 #include "motion.h"
 
 /* The stored configurations lie about this far apart (metres) for the
- * fastest-moving point of the arm, at most QRT_SWEEP_LEAVES of them: a
+ * fastest-moving point of the arm, at most QRTI_SWEEP_POSES of them: a
  * point that clear of the arm is passed with them alone, a closer one
  * needs configurations computed for it. */
 #define LEAF_SPACING_M 0.01
@@ -82,14 +82,14 @@ struct sweep {
                     of every link */
     struct float_ends ends; /* for float_off */
     long n;                 /* stored configurations, at t = (i + 0.5) / n */
-    struct qrt_sweep_leaf *leaf;
+    struct qrti_sweep_pose *pose;
     long steps_left;
     int max_steps; /* for one point or ball */
     /* how often a ball of each size (level 0 the whole run) cleared */
     long balls_cleared[RUN_LEVELS], balls_failed[RUN_LEVELS];
 };
 
-static void leaf_at(const struct sweep *s, double t, struct qrt_sweep_leaf *lf)
+static void pose_at(const struct sweep *s, double t, struct qrti_sweep_pose *lf)
 {
     double a = s->a0 + t * s->da, sg = s->s0 + t * s->ds,
            ps = s->p0 + t * s->dp;
@@ -115,17 +115,17 @@ static void turn(double *c, double *sn, double cd, double sd)
  * next one turned from the one before by the same angles. The rounding
  * adds about 1e-16 rad a step, some 1e-13 m over 256 steps at the arm's
  * reach: the CONTACT_M kept off every clearance covers it many times. */
-static void store_leaves(const struct sweep *s, struct qrt_sweep_leaf *leaf)
+static void store_poses(const struct sweep *s, struct qrti_sweep_pose *pose)
 {
     double inv_n = 1.0 / (double)s->n, ca = cos(s->da * inv_n),
            sa = sin(s->da * inv_n), cs = cos(s->ds * inv_n),
            ss = sin(s->ds * inv_n), cp = cos(s->dp * inv_n),
            sp = sin(s->dp * inv_n);
     long i;
-    leaf_at(s, 0.5 * inv_n, &leaf[0]);
+    pose_at(s, 0.5 * inv_n, &pose[0]);
     for (i = 1; i < s->n; i++) {
-        struct qrt_sweep_leaf *lf = &leaf[i];
-        *lf = leaf[i - 1];
+        struct qrti_sweep_pose *lf = &pose[i];
+        *lf = pose[i - 1];
         turn(&lf->ca, &lf->sa, ca, sa);
         turn(&lf->cs, &lf->ss, cs, ss);
         turn(&lf->cp, &lf->sp, cp, sp);
@@ -152,8 +152,8 @@ static double seg_dist2(double u, double z, double u0, double z0, double cu,
 /* For how long (in t, either way) from configuration lf every link stays
  * clear of p: the least over the links of clearance over speed. At or
  * under 0 where some link is in contact at lf itself. */
-static double clear_time(const struct sweep *s, const struct qrt_sweep_leaf *lf,
-                         const double p[3])
+static double clear_time(const struct sweep *s,
+                         const struct qrti_sweep_pose *lf, const double p[3])
 {
     /* p in the arm's plane: u along the arm's bearing, w across it */
     double u = p[0] * lf->ca + p[1] * lf->sa, w = p[1] * lf->ca - p[0] * lf->sa,
@@ -177,7 +177,7 @@ static double clear_time(const struct sweep *s, const struct qrt_sweep_leaf *lf,
 
 /* Is p farther than reach[k] from link k at configuration lf, for every
  * link? (No roots: most points pass this once for their whole window.) */
-static int clear_by(const struct sweep *s, const struct qrt_sweep_leaf *lf,
+static int clear_by(const struct sweep *s, const struct qrti_sweep_pose *lf,
                     const double p[3], const double reach[3])
 {
     double u = p[0] * lf->ca + p[1] * lf->sa, w = p[1] * lf->ca - p[0] * lf->sa,
@@ -209,7 +209,7 @@ static int advance(struct sweep *s, const double p[3], double tl, double th)
     far = ti - tl > th - ti ? ti - tl : th - ti;
     for (k = 0; k < 3; k++)
         reach[k] = s->radius[k] + CONTACT_M + s->speed[k] * far;
-    if (clear_by(s, &s->leaf[i], p, reach))
+    if (clear_by(s, &s->pose[i], p, reach))
         return 1;
     for (steps = 0; steps < s->max_steps; steps++) {
         double dt;
@@ -219,12 +219,12 @@ static int advance(struct sweep *s, const double p[3], double tl, double th)
         if (i >= s->n)
             i = s->n - 1;
         ti = ((double)i + 0.5) / (double)s->n;
-        dt = clear_time(s, &s->leaf[i], p);
+        dt = clear_time(s, &s->pose[i], p);
         if (dt > fabs(t - ti)) {
             t = ti + dt;
         } else {
-            struct qrt_sweep_leaf here;
-            leaf_at(s, t, &here);
+            struct qrti_sweep_pose here;
+            pose_at(s, t, &here);
             dt = clear_time(s, &here, p);
             if (dt <= 0.0)
                 return 0;
@@ -245,7 +245,7 @@ static int near_clear(struct sweep *s, const double p[3])
     double rho, beta, d0, lo, hi;
     long k, k_lo, k_hi;
     if (s->da == 0.0) { /* the plane stays put */
-        double w = p[1] * s->leaf[0].ca - p[0] * s->leaf[0].sa;
+        double w = p[1] * s->pose[0].ca - p[0] * s->pose[0].sa;
         return fabs(w) > s->wall || advance(s, p, 0.0, 1.0);
     }
     rho = sqrt(p[0] * p[0] + p[1] * p[1]);
@@ -472,7 +472,7 @@ static int run_clear(struct sweep *s, struct sweep *ball,
 int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
                    const struct qrt_points *pts, const struct qrt_lattice *lat,
                    const double a_deg[3], const double b_deg[3],
-                   struct qrt_sweep_leaf *leaves)
+                   struct qrti_sweep_pose *poses)
 {
     struct sweep s, ball, sample_ball;
     struct float_ends ends;
@@ -504,14 +504,14 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
     }
     float_ends_of(s.link, s.wall, s.a0, s.da, &s.ends);
     s.n = 1;
-    while (s.n < QRT_SWEEP_LEAVES && (double)s.n * LEAF_SPACING_M < fastest)
+    while (s.n < QRTI_SWEEP_POSES && (double)s.n * LEAF_SPACING_M < fastest)
         s.n *= 2;
-    s.leaf = leaves;
+    s.pose = poses;
     s.steps_left = STEPS_MEAN * pts->count + STEPS_START;
     s.max_steps = STEPS_PER_POINT;
     for (k = 0; k < RUN_LEVELS; k++)
         s.balls_cleared[k] = s.balls_failed[k] = 0;
-    store_leaves(&s, leaves);
+    store_poses(&s, poses);
     for (k = 0; k < RUN_POINTS + SAMPLE_STRIDE; k++)
         run[k] = 0; /* (the rest of a run is moved as a fixed count) */
     /* the balls' steps are counted apart: they only save work; the
