@@ -27,7 +27,8 @@
  *               a connection or a shortcut reads it, with the bit a whole
  *               mask gives it.
  *   single-node query  one node of a row not built yet, computed alone
- *               where the conversion's sector test allows it.
+ *               where the conversion's sector test allows it (the code
+ *               says such a node is "asked").
  *   cluster     nearby points grouped so the conversion shares work
  *               among them; its bounding ball holds every member.
  *   disc        a point's or a bounding ball's trace in the arm's vertical
@@ -42,8 +43,10 @@
  *   connection  the straight motion between a start or goal configuration
  *               and a lattice node next to it.
  *   goal region the few nodes nearest the goal with their exact cost to
- *               it; its boundary nodes are those with a free neighbour
- *               outside it.
+ *               it; its rim is its nodes with a free neighbour outside
+ *               it, through which every path from outside enters.
+ *   wrap        alpha's full circle: where it wraps, node n[0] is node 0
+ *               again, and a move may cross from one to the other.
  *   proved free  shown collision-free by the mask walk (every node the
  *               motion's cell boxes cover is free) or by conservative
  *               advancement against the points themselves.

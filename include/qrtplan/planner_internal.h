@@ -98,22 +98,21 @@ struct qrti_lazy_clusters {
 /* The goal region: the QRT_GOAL_REGION_NODES nodes nearest the goal, with
  * their exact cost to it, found by a short Dijkstra from the goal before
  * A* starts (perimeter search). A*'s estimate of a node outside them is
- * the least octile distance to one of their boundary nodes plus that
+ * the least octile distance to one of its rim nodes plus that
  * node's cost, which knows how the goal must be entered (the paper's
  * 10-sphere goal sits in a gap between spheres). */
 struct qrti_goal_region {
-    int settled, rim; /* entries used below; rim: boundary nodes */
+    int settled, rim; /* entries used below */
     int used; /* whether A* took its estimate (it said more at a seed) */
     int32_t node[QRT_GOAL_REGION_NODES]; /* every node settled */
     /* bit ia set: a settled node lies on alpha node ia (a node on any
      * other cannot be one of them, so A* skips the look-up) */
     uint64_t alpha[QRTI_ALPHA_WORDS];
     float cost[QRT_GOAL_REGION_NODES]; /* its exact cost to the goal */
-    /* the boundary nodes: settled nodes with a free neighbour outside the
-     * region (every path from outside enters through one): lattice
+    /* the rim: settled nodes with a free neighbour outside the region
+     * (every path from outside enters through one): lattice
      * coordinates and cost in grid steps, in columns that A* reads whole
-     * (fewer boundary nodes than the table holds: padded with infinite
-     * costs) */
+     * (a rim shorter than the table is padded with infinite costs) */
     float rim_a[QRT_GOAL_REGION_NODES], rim_s[QRT_GOAL_REGION_NODES],
         rim_e[QRT_GOAL_REGION_NODES], rim_steps[QRT_GOAL_REGION_NODES];
 };

@@ -4,9 +4,10 @@
 #include "bits.h"
 #include "cluster.h"
 #include "raster.h"
+#include "tuning.h"
 
-/* Most bytes the views and discs may take (tests set less, to take the
- * ways out when they do not fit). */
+/* Most bytes the views and discs may take: the whole table, which tests
+ * (test_plan_now_*) shrink to take the ways out when they do not fit. */
 #ifndef QRT_LAZY_VIEW_BYTES
 #define QRT_LAZY_VIEW_BYTES QRTI_LAZY_TABLE_BYTES
 #endif
@@ -272,8 +273,8 @@ void qrt_lazy_build(struct qrt_planner *pl, int ia, int is)
 }
 
 /* The bits of alpha node ia's views that reach sigma row is, from its
- * index (see lazy_alpha_index), made once enough of its nodes have been
- * asked alone that reading only the views of a node's row saves more than
+ * index (see lazy_alpha_index), made once enough single-node queries fell
+ * on it that reading only the views of a node's row saves more than
  * the index costs; NULL until then, or when it does not fit (the views are
  * never forgotten for it: the caller holds their place). */
 static const uint64_t *row_views_of(struct qrt_planner *pl, long first, int ia,

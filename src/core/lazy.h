@@ -48,8 +48,8 @@ static inline void qrt_lazy_need(struct qrt_planner *pl, int ia, int is)
 }
 
 /* Is node ijk (inside the lattice) blocked? Where rows are built as they
- * are read, a node of a row not built yet is asked alone when the sector
- * test holds (the bit a row build gives it, raster.h), else its row is
+ * are read, a node of a row not built yet is a single-node query when the
+ * sector test holds (the bit a row build gives it, raster.h), else its row is
  * built. */
 int qrt_lazy_node_blocked(struct qrt_planner *pl, const int ijk[3]);
 
@@ -66,8 +66,8 @@ static inline long qrt_lazy_known_bit(const struct qrt_planner *pl,
     return ((long)ijk[0] * n[1] + ijk[1]) * n[2] + ijk[2];
 }
 
-/* Is node ijk's bit there to read (its row built, it was asked alone, or
- * the mask is whole)? */
+/* Is node ijk's bit there to read (its row built, a single-node query set it,
+ * or the mask is whole)? */
 static inline int qrt_lazy_known(const struct qrt_planner *pl, const int ijk[3])
 {
     long bit;

@@ -12,10 +12,7 @@
 #include "raster.h"
 #include "search.h"
 #include "sweep.h"
-
-/* Steps allowed when proving a start or goal connection against the raw
- * points; a connection that needs more is refused, never assumed. */
-#define EXACT_MAX_STEPS 1000
+#include "tuning.h"
 
 void qrt_params_default(struct qrt_params *params)
 {
@@ -258,7 +255,8 @@ static void try_end(struct qrt_planner *pl, const double q[3], int ijk[3],
     qrt_lattice_joints(lat, ijk, node_deg);
     if (!motion_free(pl, q, node_deg) &&
         !qrt_motion_free_exact(&pl->params.arm, radius, &pl->points, lat, q,
-                               node_deg, EXACT_MAX_STEPS, QRT_WITNESS_AFTER))
+                               node_deg, QRT_EXACT_MAX_STEPS,
+                               QRT_WITNESS_AFTER))
         return;
     ends->node[ends->count] = node;
     ends->cost[ends->count] =
@@ -266,15 +264,14 @@ static void try_end(struct qrt_planner *pl, const double q[3], int ijk[3],
     ends->count++;
 }
 
-/* How many cells away from its nearest node a start or goal may be joined
- * to the lattice: past the 26 neighbours, shells 2 and 3 are tried, each
- * only when the one inside it gave nothing (and, as in the first, the
- * first node that joins is taken). The cells are conservative, so near a
- * surface many are blocked, and a free end amid them is otherwise
- * stranded. */
-#define JOIN_SHELLS 3
+/* A start or goal is connected to nodes up to QRT_CONNECT_SHELLS cells
+ * away from its nearest node: past the 26 neighbours, the next shells are
+ * tried, each only when the one inside it gave nothing (and, as in the
+ * first, the first node that connects is taken). The cells are
+ * conservative, so near a surface many are blocked, and a free end amid
+ * them is otherwise stranded. */
 
-/* Lattice nodes that q can be joined to: the corners of the grid cell
+/* Lattice nodes that q can be connected to: the corners of the grid cell
  * holding q, or, when none of those is free and reachable (q close to an
  * obstacle), the nodes around its nearest node, shell by shell. */
 static void collect_ends(struct qrt_planner *pl, const double q[3],
@@ -300,7 +297,7 @@ static void collect_ends(struct qrt_planner *pl, const double q[3],
             continue;
         try_end(pl, q, ijk, radius, ends);
     }
-    for (shell = 1; shell <= JOIN_SHELLS && ends->count == 0; shell++) {
+    for (shell = 1; shell <= QRT_CONNECT_SHELLS && ends->count == 0; shell++) {
         int side = 2 * shell + 1, cube = side * side * side;
         for (c = 0; c < cube && ends->count == 0; c++) {
             int d[3], ijk[3];
@@ -832,7 +829,7 @@ static int check_waypoints(const struct qrt_planner *pl,
  * of the motion (a new obstacle on the goal) are asked first, a clearance
  * each, before advancement (whose witness search waits
  * QRT_WITNESS_AFTER steps: a path's first and last segments are often
- * joins that only advancement proves, in a step or two). */
+ * connections that only advancement proves, in a step or two). */
 static int segment_blocked(const struct qrt_planner *pl, const double a[3],
                            const double b[3])
 {
@@ -846,7 +843,7 @@ static int segment_blocked(const struct qrt_planner *pl, const double a[3],
                                &pl->mask.lat, a, b, 1.0))
         return 1;
     return !qrt_motion_free_exact(&pl->params.arm, radius, &pl->points,
-                                  &pl->mask.lat, a, b, EXACT_MAX_STEPS,
+                                  &pl->mask.lat, a, b, QRT_EXACT_MAX_STEPS,
                                   QRT_WITNESS_AFTER);
 }
 

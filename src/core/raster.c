@@ -896,9 +896,9 @@ static inline void node_sector_of(const struct qrt_raster *r, int is, int ie,
 
 /* node_meets(view_from_elbow(dc)) with the node's sector loaded once,
  * and sector_meets' rejection of a disc beyond one edge's line tried
- * first: it ends nine in ten of the tests a free node's question makes (on
- * the box scenes). It gives what the full test gives: it is the same sum,
- * and a disc it rejects is neither out of link 3's reach (0 too) nor over
+ * first: it ends most of the tests a free node's query makes (the share is
+ * in docs/performance.md). It gives what the full test gives: it is the same
+ * sum, and a disc it rejects is neither out of link 3's reach (0 too) nor over
  * the elbow (view_from's 2), whose centre lies within reach of every line
  * through the elbow. */
 static inline int disc_meets_node(const struct qrt_raster *r,

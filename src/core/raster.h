@@ -8,6 +8,7 @@
 #include "qrtplan/arm.h"
 #include "qrtplan/lattice.h"
 #include "qrtplan/planner.h"
+#include "tuning.h"
 
 /* One lattice axis, in radians. */
 struct qrt_axis {
@@ -73,9 +74,6 @@ void qrt_raster_only_block(struct qrt_raster *r, int ia, int s0, int s1);
 /* Mark every node whose cell box holds a configuration that collides with
  * point p (metres). */
 void qrt_raster_point(const struct qrt_raster *r, const double p[3]);
-
-/* Most points rastered together by qrt_raster_cluster. */
-#define QRT_CLUSTER_MAX 32
 
 /* The same result as qrt_raster_point on each of the m points
  * entries members[i] of ax (m <= QRT_CLUSTER_MAX), with less work when they lie

@@ -376,7 +376,7 @@ static uint32_t moves_after(const struct moves *mv, unsigned came)
 /* The moves from ijk that stay on the lattice: all but those stepping off
  * a face, alpha's ends being faces only where it does not wrap. A node on
  * a face then takes its moves as an inside node does, but for the index of
- * a move across alpha's seam. */
+ * a move across alpha's wrap (where node n[0] is node 0 again). */
 static uint32_t moves_on(const struct qrt_lattice *lat, const struct moves *mv,
                          const int ijk[3])
 {
@@ -392,9 +392,9 @@ static uint32_t moves_on(const struct qrt_lattice *lat, const struct moves *mv,
 }
 
 /* The turns to add to alpha coordinate a, one past an end of the lattice
- * after a move across alpha's seam (moves_on lets one only where alpha
+ * after a move across alpha's wrap (moves_on lets one only where alpha
  * wraps): +1 below node 0, -1 above the last, else 0. */
-static inline int seam_turns(const struct qrt_lattice *lat, int a)
+static inline int wrap_turns(const struct qrt_lattice *lat, int a)
 {
     if (a < 0)
         return 1;
@@ -493,7 +493,7 @@ static void search_from(struct qrt_planner *pl, const struct moves *mv,
             d = qrt_lowest_bit(todo);
             v = u + mv->delta[d];
             if (!inside)
-                v += turn * seam_turns(lat, ijk[0] + mv->offset[d][0]);
+                v += turn * wrap_turns(lat, ijk[0] + mv->offset[d][0]);
             /* the tests by index first: most moves end at one of them */
             place = place_of(pl, v);
             if (place == -2)
@@ -505,7 +505,7 @@ static void search_from(struct qrt_planner *pl, const struct moves *mv,
             nb[1] = ijk[1] + mv->offset[d][1];
             nb[2] = ijk[2] + mv->offset[d][2];
             if (!inside)
-                nb[0] += lat->n[0] * seam_turns(lat, nb[0]);
+                nb[0] += lat->n[0] * wrap_turns(lat, nb[0]);
             /* a bit set is final even in a row not built yet; a node not
              * known yet is checked when taken */
             if (qrt_mask_bit(&pl->mask, nb))
