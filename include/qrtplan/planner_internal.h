@@ -176,7 +176,7 @@ struct qrt_planner {
      * so far, or QRTI_LAZY_NO_INDEX when it did not fit */
     int32_t lazy_alpha_index[QRT_MAX_NA];
     /* where they fit (lazy_lists), each alpha node's kept clusters (those
-     * whose window holds it) are listed from table entry
+     * that may block it) are listed from table entry
      * lazy_alpha_list[ia] (int32s right after the clusters, up to byte
      * lazy_lists_end), lazy_alpha_clusters[ia] of them */
     int32_t lazy_alpha_list[QRT_MAX_NA], lazy_alpha_clusters[QRT_MAX_NA];
