@@ -4,6 +4,10 @@
 # compile programs against it with other settings than the library's and
 # check that qrt_planner_init refuses them (QRT_E_ABI, a sentence naming the
 # settings) instead of letting the library overrun their smaller planner.
+# Last, build and install a library with a value other than the default for
+# every setting of config.h, and check that a consumer that passes no -D
+# flags of its own gets the library's settings through find_package and
+# through pkg-config alike (qrt_planner_init succeeds).
 set -euo pipefail
 build=$1
 src=$(cd "$(dirname "$0")" && pwd)/consumer
@@ -55,3 +59,36 @@ mismatch grid_points \
 mismatch waypoints "QRT_MAX_WAYPOINTS 64, the library with " -- \
     -DQRT_GRID_DEG_MIN="$grid" -DQRT_MAX_POINTS="$points" \
     -DQRT_MAX_WAYPOINTS=64
+
+# A library built with a value other than the default for every setting.
+# Only the library and the program are built (the install rules need both).
+alt=$work/alt
+cmake -S "$src/../.." -B "$alt/build" -DQRT_PYTHON_TESTS=OFF \
+    -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQRT_GRID_DEG_MIN=10 \
+    -DQRT_MAX_POINTS=2048 -DQRT_MAX_WAYPOINTS=64 -DQRT_GOAL_REGION_NODES=8 \
+    -DQRT_LAZY_INDEX_AFTER=4 >/dev/null
+targets=(qrtplan)
+if grep -q '^QRT_CORE_ONLY:BOOL=OFF' "$alt/build/CMakeCache.txt"; then
+    targets+=(qrtplan_cli)
+fi
+cmake --build "$alt/build" -j2 --target "${targets[@]}" >/dev/null
+cmake --install "$alt/build" --prefix "$alt/prefix" >/dev/null
+want="QRT_GRID_DEG_MIN 10 QRT_MAX_POINTS 2048 QRT_MAX_WAYPOINTS 64"
+want="$want QRT_GOAL_REGION_NODES 8 QRT_LAZY_INDEX_AFTER 4"
+# consumed: run the program, which must plan, and see the settings it saw
+consumed() {
+    local how=$1 out rc=0
+    shift
+    out=$("$@" 2>&1) || rc=$?
+    if [ "$rc" != 0 ] || [[ "$out" != *"settings: $want"* ]]; then
+        echo "FAIL: the library built with $want, consumed through $how: $out"
+        exit 1
+    fi
+    echo "non-default settings through $how: $out"
+}
+cmake -S "$src" -B "$alt/cmake" -DCMAKE_PREFIX_PATH="$alt/prefix" >/dev/null
+cmake --build "$alt/cmake" >/dev/null
+consumed find_package "$alt/cmake/consumer"
+export PKG_CONFIG_PATH=$alt/prefix/lib/pkgconfig
+cc -std=c99 "$src/main.c" $(pkg-config --cflags --libs qrtplan) -o "$alt/pc"
+consumed pkg-config "$alt/pc"

@@ -2,8 +2,13 @@
  *
  * Every table in the core is sized from these numbers, so the size of
  * struct qrt_planner is known at compile time and nothing is allocated at run
- * time. Override them with -D on the compiler command line (the CMake options
- * QRT_GRID_DEG_MIN and QRT_MAX_POINTS do that for you).
+ * time. Each setting below changes the layout of struct qrt_planner or
+ * struct qrt_plan, or the planner's behaviour, so a caller must be compiled
+ * with the library's values (the ABI guard in planner.h refuses any other).
+ * Set them through the CMake cache variables of the same names: the
+ * installed CMake package and pkg-config file then pass the library's
+ * values to every consumer. Without CMake, pass the same -D flags to the
+ * library and to every caller.
  */
 #ifndef QRTPLAN_CONFIG_H
 #define QRTPLAN_CONFIG_H
@@ -31,11 +36,29 @@
 #define QRT_MAX_WAYPOINTS 256
 #endif
 
+/* Nodes of the goal region (the nodes nearest the goal, with their exact
+ * cost to it, that A* reads its estimate from): more nodes make a better
+ * estimate near a goal among obstacles and a longer Dijkstra before A*.
+ * A multiple of 4, since A* reads the region in 4-wide lanes. */
+#ifndef QRT_GOAL_REGION_NODES
+#define QRT_GOAL_REGION_NODES 12
+#endif
+
+/* Single-node queries on one alpha node after which its views are indexed
+ * by sigma row: the index costs a pass over the views, repaid only when
+ * many queries fall on that alpha node. Behaviour only, not layout. */
+#ifndef QRT_LAZY_INDEX_AFTER
+#define QRT_LAZY_INDEX_AFTER 16
+#endif
+
 #if (20 % QRT_GRID_DEG_MIN) != 0
 #error "QRT_GRID_DEG_MIN must divide 20"
 #endif
 #if QRT_MAX_POINTS < 1 || QRT_MAX_POINTS > (1L << 20)
 #error "QRT_MAX_POINTS must be in 1 .. 2^20"
+#endif
+#if QRT_GOAL_REGION_NODES < 4 || QRT_GOAL_REGION_NODES % 4 != 0
+#error "QRT_GOAL_REGION_NODES must be a multiple of 4 (A* reads it in lanes)"
 #endif
 
 /* Lattice dimensions for the default joint limits at the finest grid; these

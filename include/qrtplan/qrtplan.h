@@ -5,6 +5,7 @@
 #include "qrtplan/arm.h"
 #include "qrtplan/config.h"
 #include "qrtplan/lattice.h"
+#include "qrtplan/params.h"
 #include "qrtplan/planner.h"
 #include "qrtplan/points.h"
 #include "qrtplan/status.h"

@@ -1,4 +1,5 @@
-/* Error codes of the core's functions and the statuses of a plan. */
+/* Error codes of the core's functions, the statuses of a plan and of the
+ * planner's mask. */
 #ifndef QRTPLAN_STATUS_H
 #define QRTPLAN_STATUS_H
 
@@ -26,6 +27,15 @@ enum qrt_plan_status {
     QRT_STATUS_GOAL_BLOCKED,
     QRT_STATUS_UNREACHABLE,
     QRT_STATUS_CAPACITY
+};
+
+/* What the planner's mask holds for the points now in its table
+ * (qrt_planner_mask_state; the terms are defined in planner.h). */
+enum qrt_mask_state {
+    QRT_MASK_NONE = 0, /* points only: no mask for these points yet */
+    QRT_MASK_PARTIAL,  /* the rows and nodes built as read for these
+                          points, and the clusters to build more from */
+    QRT_MASK_WHOLE     /* every row built for these points */
 };
 
 /* "ok", "no_path", ... exactly as in the plan file format. */

@@ -313,7 +313,7 @@ static int cmd_mask(int argc, char **argv)
     out = open_output(out_path);
     if (!out)
         return fail(out_path, "cannot open for writing");
-    mask_write_json(out, &planner.mask);
+    mask_write_json(out, qrt_planner_mask(&planner));
     return close_output(out, out_path);
 }
 

@@ -6,17 +6,11 @@
 #include <stdint.h>
 
 #include "qrtplan/points.h"
+#include "tuning.h"
 
-/* Edge of the cubes that group points for the raster: larger groups share
- * more work, but their bounding balls are less often already covered. */
-#ifndef QRT_CLUSTER_CELL_M
-#define QRT_CLUSTER_CELL_M 0.05
-#endif
-
-/* Points this far apart on average fall one to a cube of QRT_CLUSTER_CELL_M
- * and share no work: fewer than QRT_CLUSTER_SPARSE_MEAN points per group
- * there, and the cubes are made twice as large. */
-#define QRT_CLUSTER_SPARSE_MEAN 2
+/* Points are grouped in cubes of edge QRT_CLUSTER_CELL_M (tuning.h); where
+ * they lie so far apart that fewer than QRT_CLUSTER_SPARSE_MEAN fall in a
+ * group on average, the cubes are made twice as large. */
 
 typedef void (*qrt_cluster_visit)(void *ctx, const int32_t *members, int m);
 

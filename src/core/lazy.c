@@ -4,17 +4,18 @@
 #include "bits.h"
 #include "cluster.h"
 #include "raster.h"
+#include "tuning.h"
 
-/* Most bytes the views and discs may take (tests set less, to take the
- * ways out when they do not fit). */
+/* Most bytes the views and discs may take: the whole table, which tests
+ * (test_plan_now_*) shrink to take the ways out when they do not fit. */
 #ifndef QRT_LAZY_VIEW_BYTES
-#define QRT_LAZY_VIEW_BYTES QRT_LAZY_TABLE_BYTES
+#define QRT_LAZY_VIEW_BYTES QRTI_LAZY_TABLE_BYTES
 #endif
 
 /* The table's bytes after the clusters. */
 static long clusters_end(const struct qrt_planner *pl)
 {
-    return pl->lazy_clusters * (long)sizeof(struct qrt_cluster_geom);
+    return pl->lazy_clusters * (long)sizeof(struct qrti_cluster_geom);
 }
 
 /* Forget every view and disc kept (the table's bytes after the clusters
@@ -36,8 +37,8 @@ static long table_take(struct qrt_planner *pl, long n, long size)
 {
     long first = (pl->lazy_views_top + size - 1) / size;
     long end = clusters_end(pl) + QRT_LAZY_VIEW_BYTES;
-    if (end > QRT_LAZY_TABLE_BYTES)
-        end = QRT_LAZY_TABLE_BYTES;
+    if (end > QRTI_LAZY_TABLE_BYTES)
+        end = QRTI_LAZY_TABLE_BYTES;
     if ((first + n) * size > end)
         return -1;
     pl->lazy_views_top = (first + n) * size;
@@ -57,13 +58,13 @@ struct keep_ctx {
 static void keep_cluster(void *ctx, const int32_t *members, int m)
 {
     struct keep_ctx *k = (struct keep_ctx *)ctx;
-    struct qrt_lazy_clusters *c = &k->pl->open.lazy.clusters;
-    struct qrt_cluster_geom *g;
+    struct qrti_lazy_clusters *c = &k->pl->open.lazy.clusters;
+    struct qrti_cluster_geom *g;
     int j;
     if (!k->ok || m < 1)
         return;
-    if (m > QRT_CLUSTER_MAX || k->pl->lazy_clusters >= QRT_LAZY_MAX_CLUSTERS ||
-        k->members + m > QRT_LAZY_MAX_POINTS) {
+    if (m > QRT_CLUSTER_MAX || k->pl->lazy_clusters >= QRTI_LAZY_MAX_CLUSTERS ||
+        k->members + m > QRTI_LAZY_MAX_POINTS) {
         k->ok = 0;
         return;
     }
@@ -87,7 +88,7 @@ static void clear_known(struct qrt_planner *pl)
  * lists do not fit, every cluster is asked instead (lazy_lists 0). */
 static void make_alpha_lists(struct qrt_planner *pl)
 {
-    struct qrt_lazy_clusters *c = &pl->open.lazy.clusters;
+    struct qrti_lazy_clusters *c = &pl->open.lazy.clusters;
     long i, at = (clusters_end(pl) + 3) / 4, total = 0, end;
     int ia, w;
     pl->lazy_lists = 0;
@@ -95,7 +96,7 @@ static void make_alpha_lists(struct qrt_planner *pl)
     for (ia = 0; ia < QRT_MAX_NA; ia++)
         pl->lazy_alpha_clusters[ia] = 0;
     for (i = 0; i < pl->lazy_clusters; i++)
-        for (w = 0; w < QRT_ALPHA_WORDS; w++) {
+        for (w = 0; w < QRTI_ALPHA_WORDS; w++) {
             uint64_t bits = c->t.geom[i].alpha[w];
             for (; bits; bits &= bits - 1U)
                 pl->lazy_alpha_clusters[(w << 6) + qrt_lowest_bit(bits)]++;
@@ -107,10 +108,10 @@ static void make_alpha_lists(struct qrt_planner *pl)
     }
     end = (at + total) * (long)sizeof(int32_t);
     if (end > clusters_end(pl) + QRT_LAZY_VIEW_BYTES ||
-        end > QRT_LAZY_TABLE_BYTES)
+        end > QRTI_LAZY_TABLE_BYTES)
         return;
     for (i = 0; i < pl->lazy_clusters; i++)
-        for (w = 0; w < QRT_ALPHA_WORDS; w++) {
+        for (w = 0; w < QRTI_ALPHA_WORDS; w++) {
             uint64_t bits = c->t.geom[i].alpha[w];
             for (; bits; bits &= bits - 1U) {
                 ia = (w << 6) + qrt_lowest_bit(bits);
@@ -127,8 +128,7 @@ int qrt_lazy_begin(struct qrt_planner *pl, struct qrt_raster *r)
     struct keep_ctx k;
     double cell;
     int w;
-    pl->lazy = 0;
-    pl->lazy_kept = 0;
+    pl->lazy_raster = NULL;
     pl->lazy_clusters = 0;
     for (w = 0; w < QRT_ROW_SET_WORDS; w++)
         pl->rows_ready[w] = 0;
@@ -159,7 +159,7 @@ int qrt_lazy_begin(struct qrt_planner *pl, struct qrt_raster *r)
     pl->lazy_forgets = pl->lazy_unviewed_rows = pl->lazy_unkept_discs = 0;
     pl->lazy_nodes_asked = 0;
     pl->lazy_raster = r;
-    pl->lazy = 1;
+    pl->mask_state = QRT_MASK_PARTIAL;
     return 1;
 }
 
@@ -174,8 +174,8 @@ static void mark_ready(struct qrt_planner *pl, int ia, int is)
  * first view's index, or -1 when even all the free bytes cannot hold them. */
 static long alpha_views(struct qrt_planner *pl, int ia)
 {
-    const long size = (long)sizeof(struct qrt_alpha_view);
-    struct qrt_lazy_clusters *c = &pl->open.lazy.clusters;
+    const long size = (long)sizeof(struct qrti_alpha_view);
+    struct qrti_lazy_clusters *c = &pl->open.lazy.clusters;
     const struct qrt_point_axes ax = qrt_points_axes(&pl->points);
     long i, n = 0, first, k = 0, e, count;
     if (pl->lazy_alpha_first[ia] >= 0)
@@ -197,8 +197,8 @@ static long alpha_views(struct qrt_planner *pl, int ia)
     }
     count = pl->lazy_lists ? n : pl->lazy_clusters;
     for (e = 0; e < count; e++) {
-        const struct qrt_cluster_geom *g;
-        struct qrt_alpha_view *v = &c->t.view[first + k];
+        const struct qrti_cluster_geom *g;
+        struct qrti_alpha_view *v = &c->t.view[first + k];
         i = pl->lazy_lists ? c->t.list[pl->lazy_alpha_list[ia] + e] : e;
         g = &c->t.geom[i];
         if (((g->alpha[ia >> 6] >> (ia & 63)) & 1U) &&
@@ -217,18 +217,18 @@ static long alpha_views(struct qrt_planner *pl, int ia)
 
 /* The members' discs of view v: kept from the first time they are asked
  * for, while the free bytes last; else made into scratch each time. */
-static const struct qrt_disc *member_discs(struct qrt_planner *pl, int ia,
-                                           struct qrt_alpha_view *v,
-                                           struct qrt_disc *scratch)
+static const struct qrti_disc *member_discs(struct qrt_planner *pl, int ia,
+                                            struct qrti_alpha_view *v,
+                                            struct qrti_disc *scratch)
 {
-    struct qrt_lazy_clusters *c = &pl->open.lazy.clusters;
-    const struct qrt_cluster_geom *g = &c->t.geom[v->cluster];
+    struct qrti_lazy_clusters *c = &pl->open.lazy.clusters;
+    const struct qrti_cluster_geom *g = &c->t.geom[v->cluster];
     const struct qrt_point_axes ax = qrt_points_axes(&pl->points);
-    struct qrt_disc *md = scratch;
+    struct qrti_disc *md = scratch;
     long at;
     if (v->members_at >= 0)
         return &c->t.disc[v->members_at];
-    at = table_take(pl, g->m, (long)sizeof(struct qrt_disc));
+    at = table_take(pl, g->m, (long)sizeof(struct qrti_disc));
     if (at >= 0) {
         v->members_at = (int32_t)at;
         md = &c->t.disc[at];
@@ -244,21 +244,21 @@ static const struct qrt_disc *member_discs(struct qrt_planner *pl, int ia,
  * order, through their kept views. */
 void qrt_lazy_build(struct qrt_planner *pl, int ia, int is)
 {
-    struct qrt_lazy_clusters *c = &pl->open.lazy.clusters;
-    struct qrt_disc scratch[QRT_CLUSTER_MAX];
+    struct qrti_lazy_clusters *c = &pl->open.lazy.clusters;
+    struct qrti_disc scratch[QRT_CLUSTER_MAX];
     long first, k;
     qrt_raster_only_block(pl->lazy_raster, ia, is, is + 1);
     first = alpha_views(pl, ia);
     if (first < 0) { /* no room for the views: each cluster from scratch */
         const struct qrt_point_axes ax = qrt_points_axes(&pl->points);
         for (k = 0; k < pl->lazy_clusters; k++) {
-            const struct qrt_cluster_geom *g = &c->t.geom[k];
+            const struct qrti_cluster_geom *g = &c->t.geom[k];
             qrt_raster_cluster_at(pl->lazy_raster, &ax, c->members + g->first,
                                   c->member_rho + g->first, g, ia);
         }
     }
     for (k = 0; first >= 0 && k < pl->lazy_alpha_count[ia]; k++) {
-        struct qrt_alpha_view *v = &c->t.view[first + k];
+        struct qrti_alpha_view *v = &c->t.view[first + k];
         uint64_t ask[QRT_ROW_WORDS];
         int m;
         if (!((v->rows[is >> 6] >> (is & 63)) & 1U))
@@ -273,30 +273,30 @@ void qrt_lazy_build(struct qrt_planner *pl, int ia, int is)
 }
 
 /* The bits of alpha node ia's views that reach sigma row is, from its
- * index (see lazy_alpha_index), made once enough of its nodes have been
- * asked alone that reading only the views of a node's row saves more than
+ * index (see lazy_alpha_index), made once enough single-node queries fell
+ * on it that reading only the views of a node's row saves more than
  * the index costs; NULL until then, or when it does not fit (the views are
  * never forgotten for it: the caller holds their place). */
 static const uint64_t *row_views_of(struct qrt_planner *pl, long first, int ia,
                                     int is)
 {
-    struct qrt_lazy_clusters *c = &pl->open.lazy.clusters;
+    struct qrti_lazy_clusters *c = &pl->open.lazy.clusters;
     int32_t *at = &pl->lazy_alpha_index[ia];
     long n = pl->lazy_alpha_count[ia], words = (n + 63) / 64, k, w, index;
     int ns = pl->mask.lat.n[1];
     if (*at >= 0)
         return &c->t.row_views[*at + is * words];
-    if (*at == QRT_LAZY_NO_INDEX || --*at > -1 - QRT_LAZY_INDEX_AFTER)
+    if (*at == QRTI_LAZY_NO_INDEX || --*at > -1 - QRT_LAZY_INDEX_AFTER)
         return NULL;
     index = table_take(pl, ns * words, (long)sizeof(uint64_t));
     if (index < 0) {
-        *at = QRT_LAZY_NO_INDEX;
+        *at = QRTI_LAZY_NO_INDEX;
         return NULL;
     }
     for (k = 0; k < ns * words; k++)
         c->t.row_views[index + k] = 0;
     for (k = 0; k < n; k++)
-        for (w = 0; w < QRT_SIGMA_WORDS; w++) {
+        for (w = 0; w < QRTI_SIGMA_WORDS; w++) {
             uint64_t rows = c->t.view[first + k].rows[w];
             for (; rows; rows &= rows - 1U) {
                 long row = (w << 6) + qrt_lowest_bit(rows);
@@ -317,15 +317,15 @@ static const uint64_t *row_views_of(struct qrt_planner *pl, long first, int ia,
 int qrt_lazy_node_from_views(struct qrt_planner *pl, long first, int ia, int is,
                              int ie)
 {
-    struct qrt_lazy_clusters *c = &pl->open.lazy.clusters;
-    struct qrt_disc scratch[QRT_CLUSTER_MAX];
-    const struct qrt_alpha_view *views = &c->t.view[first];
+    struct qrti_lazy_clusters *c = &pl->open.lazy.clusters;
+    struct qrti_disc scratch[QRT_CLUSTER_MAX];
+    const struct qrti_alpha_view *views = &c->t.view[first];
     long k, n = pl->lazy_alpha_count[ia];
     const uint64_t *row = row_views_of(pl, first, ia, is);
     for (k = qrt_raster_next_ball(pl->lazy_raster, views, row, 0, n, is, ie);
          k < n; k = qrt_raster_next_ball(pl->lazy_raster, views, row, k + 1, n,
                                          is, ie)) {
-        struct qrt_alpha_view *v = &c->t.view[first + k];
+        struct qrti_alpha_view *v = &c->t.view[first + k];
         int m = c->t.geom[v->cluster].m;
         if (m == 1 ||
             qrt_raster_node_members(pl->lazy_raster, is, ie,
@@ -373,24 +373,20 @@ void qrt_lazy_build_rows(struct qrt_planner *pl, const uint64_t *rows)
 
 void qrt_lazy_finish(struct qrt_planner *pl)
 {
-    if (!pl->lazy)
+    if (!qrt_lazy_building(pl))
         return;
     qrt_lazy_build_rows(pl, NULL);
-    pl->lazy = 0;
-    pl->lazy_kept = 0; /* the heap takes the clusters' room */
+    pl->lazy_raster = NULL;
+    pl->mask_state = QRT_MASK_WHOLE; /* the heap takes the clusters' room */
 }
 
 int qrt_lazy_end(struct qrt_planner *pl)
 {
-    int whole = !pl->lazy;
-    pl->lazy = 0;
     pl->lazy_raster = NULL;
-    return whole;
+    return pl->mask_state == QRT_MASK_WHOLE;
 }
 
 void qrt_lazy_resume(struct qrt_planner *pl, struct qrt_raster *r)
 {
     pl->lazy_raster = r;
-    pl->lazy = 1;
-    pl->lazy_kept = 0; /* until the caller keeps them again */
 }

@@ -15,20 +15,29 @@
 
 #include "qrtplan/planner.h"
 
-/* Clear the mask and cluster the points into pl->open.lazy, with r (set
- * up for the mask, owned by the caller until qrt_lazy_end). Returns 1 with
- * pl->lazy set, or 0 (too many clusters, or no scratch for clustering):
- * then build the whole mask instead. */
+/* Cluster the points into pl->open.lazy and keep them there, with r (set
+ * up for the cleared mask, owned by the caller until qrt_lazy_end).
+ * Returns 1, rows now built as read and the mask partial, or 0 (too many
+ * clusters, or no scratch for clustering): then build the whole mask
+ * instead. */
 int qrt_lazy_begin(struct qrt_planner *pl, struct qrt_raster *r);
 
 /* Build row (ia, is). */
 void qrt_lazy_build(struct qrt_planner *pl, int ia, int is);
 
-/* Is row (ia, is) there to read (built, or the mask is whole)? */
+/* Is the current call building rows as it reads them (between
+ * qrt_lazy_begin or qrt_lazy_resume and qrt_lazy_end or qrt_lazy_finish)? */
+static inline int qrt_lazy_building(const struct qrt_planner *pl)
+{
+    return pl->lazy_raster != NULL;
+}
+
+/* Is row (ia, is) there to read (built, or no rows are built as read)? */
 static inline int qrt_lazy_ready(const struct qrt_planner *pl, int ia, int is)
 {
     long bit = (long)ia * QRT_MAX_NS + is;
-    return !pl->lazy || ((pl->rows_ready[bit >> 6] >> (bit & 63)) & 1U);
+    return !qrt_lazy_building(pl) ||
+           ((pl->rows_ready[bit >> 6] >> (bit & 63)) & 1U);
 }
 
 /* Row (ia, is) built, if rows are being built as they are read. */
@@ -39,8 +48,8 @@ static inline void qrt_lazy_need(struct qrt_planner *pl, int ia, int is)
 }
 
 /* Is node ijk (inside the lattice) blocked? Where rows are built as they
- * are read, a node of a row not built yet is asked alone when the sector
- * test holds (the bit a row build gives it, raster.h), else its row is
+ * are read, a node of a row not built yet is a single-node query when the
+ * sector test holds (the bit a row build gives it, raster.h), else its row is
  * built. */
 int qrt_lazy_node_blocked(struct qrt_planner *pl, const int ijk[3]);
 
@@ -57,8 +66,8 @@ static inline long qrt_lazy_known_bit(const struct qrt_planner *pl,
     return ((long)ijk[0] * n[1] + ijk[1]) * n[2] + ijk[2];
 }
 
-/* Is node ijk's bit there to read (its row built, it was asked alone, or
- * the mask is whole)? */
+/* Is node ijk's bit there to read (its row built, a single-node query set it,
+ * or the mask is whole)? */
 static inline int qrt_lazy_known(const struct qrt_planner *pl, const int ijk[3])
 {
     long bit;
@@ -73,12 +82,13 @@ static inline int qrt_lazy_known(const struct qrt_planner *pl, const int ijk[3])
 void qrt_lazy_build_rows(struct qrt_planner *pl, const uint64_t *rows);
 
 /* Build every row not built yet and give the clusters up (the heap may
- * then use the whole array). The mask is whole afterwards. */
+ * then use the whole array). The mask is whole afterwards
+ * (QRT_MASK_WHOLE). */
 void qrt_lazy_finish(struct qrt_planner *pl);
 
-/* Stop building rows; returns whether the mask is whole. The clusters and
- * the rows built stay in place: pl->lazy_kept says whether a later
- * qrt_lazy_resume may take them up again (the caller sets it). */
+/* Stop building rows; returns whether the mask is whole. Otherwise the
+ * clusters and the rows built stay kept (QRT_MASK_PARTIAL), so that a
+ * later qrt_lazy_resume takes them up again. */
 int qrt_lazy_end(struct qrt_planner *pl);
 
 /* Build rows as they are read again, from the clusters and rows kept by

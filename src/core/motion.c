@@ -145,12 +145,11 @@ static void near_box(const double lo[3], const double hi[3], double reach,
 }
 
 /* Points are first tried against the box that holds the arm's clearance so
- * far in blocks of this many, in float over each axis (4 lanes): most
- * blocks of a scan hold no point near the arm, and most points of the
+ * far in blocks of QRT_CLEARANCE_BLOCK, in float over each axis (4 lanes):
+ * most blocks of a scan hold no point near the arm, and most points of the
  * others are out of the box too. */
-#define CLEARANCE_BLOCK 64
 
-/* Mark in in[] the CLEARANCE_BLOCK entries from `at` on that are not out
+/* Mark in in[] the QRT_CLEARANCE_BLOCK entries from `at` on that are not out
  * of the box lo..hi, and tell how many. The box is of doubles and the test
  * in float, yet a point the test puts out is out of lo..hi: no float lies
  * strictly between a double and the float nearest it, so for a float x,
@@ -160,12 +159,12 @@ static void near_box(const double lo[3], const double hi[3], double reach,
  * count and no branch: the compiler makes it 4 lanes wide. */
 static int mark_in_box(const struct qrt_points *pts, long at,
                        const double lo[3], const double hi[3],
-                       int in[CLEARANCE_BLOCK])
+                       int in[QRT_CLEARANCE_BLOCK])
 {
     float lo_x = (float)lo[0], lo_y = (float)lo[1], lo_z = (float)lo[2],
           hi_x = (float)hi[0], hi_y = (float)hi[1], hi_z = (float)hi[2];
     int j, count = 0;
-    for (j = 0; j < CLEARANCE_BLOCK; j++) {
+    for (j = 0; j < QRT_CLEARANCE_BLOCK; j++) {
         float x = pts->x[at + j], y = pts->y[at + j], z = pts->z[at + j];
         in[j] = !((x < lo_x) | (x > hi_x) | (y < lo_y) | (y > hi_y) |
                   (z < lo_z) | (z > hi_z));
@@ -203,11 +202,11 @@ double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],
      * turns them away with one test instead of three (grown again only
      * when best falls). */
     near_box(arm_lo, arm_hi, best + widest, near_lo, near_hi);
-    for (i = 0; i < pts->count; i += CLEARANCE_BLOCK) {
+    for (i = 0; i < pts->count; i += QRT_CLEARANCE_BLOCK) {
         /* the marks are made with the box as it is at the block's start;
          * it only shrinks, so a point out of it then stays out */
-        int in[CLEARANCE_BLOCK], m = CLEARANCE_BLOCK, b;
-        if (pts->count - i < CLEARANCE_BLOCK) {
+        int in[QRT_CLEARANCE_BLOCK], m = QRT_CLEARANCE_BLOCK, b;
+        if (pts->count - i < QRT_CLEARANCE_BLOCK) {
             m = (int)(pts->count - i);
             for (b = 0; b < m; b++)
                 in[b] = 1;
@@ -252,18 +251,17 @@ double qrt_clearance(const struct qrt_arm *arm, const double radius_m[3],
 
 /* Advancement on a blocked motion crawls ever closer to the contact, one
  * clearance over all points per step. After witness_after steps it looks
- * for a witness instead: a colliding configuration among WITNESS_SAMPLES
+ * for a witness instead: a colliding configuration among QRT_WITNESS_SAMPLES
  * samples, taken coarse to fine (the far end first, then the middle, the
  * quarters, ...), decides the motion. Advancement could never have passed
  * a colliding configuration, so the answer is the same, only sooner. */
-#define WITNESS_SAMPLES 32
 
 static int has_witness(const struct qrt_arm *arm, const double radius_m[3],
                        const struct qrt_points *pts, const double a_deg[3],
                        const double d[3])
 {
     int level, k, j;
-    for (level = 1; level <= WITNESS_SAMPLES; level *= 2)
+    for (level = 1; level <= QRT_WITNESS_SAMPLES; level *= 2)
         for (k = 1; k <= level; k += 2) { /* s = k / level, new ones only */
             double q[3], s = (double)k / level;
             for (j = 0; j < 3; j++)

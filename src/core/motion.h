@@ -7,6 +7,7 @@
 #include "qrtplan/arm.h"
 #include "qrtplan/lattice.h"
 #include "qrtplan/points.h"
+#include "tuning.h"
 
 /* Joint step from a to b in degrees: alpha the short way round, in
  * (-180, 180], when the lattice wraps (docs/spec.md section Guarantee). */
@@ -73,9 +74,8 @@ double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],
  * more than max_steps steps). After witness_after steps, samples of the
  * motion are searched for a colliding one, which ends a blocked motion's
  * crawl towards the contact (the answer is the same): QRT_WITNESS_AFTER
- * suits motions that are often free (joins advancement proves in a step or
- * two), 0 motions known to be blocked nearly always. */
-#define QRT_WITNESS_AFTER 4
+ * suits motions that are often free (connections advancement proves in a
+ * step or two), 0 motions known to be blocked nearly always. */
 int qrt_motion_free_exact(const struct qrt_arm *arm, const double radius_m[3],
                           const struct qrt_points *pts,
                           const struct qrt_lattice *lat, const double a_deg[3],

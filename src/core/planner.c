@@ -12,10 +12,7 @@
 #include "raster.h"
 #include "search.h"
 #include "sweep.h"
-
-/* Steps allowed when proving a start or goal connection against the raw
- * points; a connection that needs more is refused, never assumed. */
-#define EXACT_MAX_STEPS 1000
+#include "tuning.h"
 
 void qrt_params_default(struct qrt_params *params)
 {
@@ -69,9 +66,8 @@ int qrt_planner_init_abi(struct qrt_planner *pl,
         if (arm->link_radius_m[k] > rmax)
             rmax = arm->link_radius_m[k];
     qrt_points_reset(&pl->points, arm_reach(arm) + rmax + params->margin_m);
-    pl->mask_stale = 1;
+    pl->mask_state = QRT_MASK_NONE;
     pl->cells_blocked = 0;
-    pl->lazy = pl->lazy_kept = 0;
     pl->lazy_clusters = 0;
     pl->lazy_raster = NULL;
     return QRT_OK;
@@ -80,17 +76,16 @@ int qrt_planner_init_abi(struct qrt_planner *pl,
 void qrt_planner_clear_points(struct qrt_planner *pl)
 {
     qrt_points_reset(&pl->points, pl->points.reach_m);
-    pl->mask_stale = 1;
-    pl->lazy_kept = 0;
+    pl->mask_state = QRT_MASK_NONE;
 }
 
 int qrt_planner_add_points(struct qrt_planner *pl, const double *xyz, long n)
 {
     int rc = qrt_points_add(&pl->points, xyz, n);
-    if (rc == QRT_OK && n > 0)
-        pl->mask_stale = 1;
-    if (n > 0)
-        pl->lazy_kept = 0;
+    /* points added: no mask is theirs yet; refused points leave a whole
+     * mask whole, but the kept clusters are given up all the same */
+    if (n > 0 && (rc == QRT_OK || pl->mask_state != QRT_MASK_WHOLE))
+        pl->mask_state = QRT_MASK_NONE;
     return rc;
 }
 
@@ -122,8 +117,7 @@ static void start_mask(struct qrt_planner *pl)
         for (is = 0; is < QRT_MAX_NS; is++)
             for (w = 0; w < QRT_ROW_WORDS; w++)
                 pl->mask.rows[ia][is][w] = 0;
-    pl->mask_stale = 1; /* until the whole mask is built */
-    pl->lazy_kept = 0;
+    pl->mask_state = QRT_MASK_NONE; /* until rows are built */
 }
 
 int qrt_planner_build_mask_begin(struct qrt_planner *pl)
@@ -178,8 +172,18 @@ int qrt_planner_build_mask_part(struct qrt_planner *pl, int part, int nparts)
 int qrt_planner_build_mask_end(struct qrt_planner *pl)
 {
     pl->cells_blocked = qrt_mask_count_blocked(&pl->mask);
-    pl->mask_stale = 0;
+    pl->mask_state = QRT_MASK_WHOLE;
     return QRT_OK;
+}
+
+enum qrt_mask_state qrt_planner_mask_state(const struct qrt_planner *pl)
+{
+    return pl->mask_state;
+}
+
+const struct qrt_mask *qrt_planner_mask(const struct qrt_planner *pl)
+{
+    return &pl->mask;
 }
 
 int qrt_planner_build_mask(struct qrt_planner *pl)
@@ -221,7 +225,7 @@ static int node_blocked(void *ctx, const int ijk[3])
 static int motion_free(struct qrt_planner *pl, const double a[3],
                        const double b[3])
 {
-    if (pl->lazy)
+    if (qrt_lazy_building(pl))
         return qrt_motion_free_asking(&pl->mask, node_blocked, pl, a, b);
     return qrt_motion_free_on_mask(&pl->mask, a, b);
 }
@@ -251,7 +255,8 @@ static void try_end(struct qrt_planner *pl, const double q[3], int ijk[3],
     qrt_lattice_joints(lat, ijk, node_deg);
     if (!motion_free(pl, q, node_deg) &&
         !qrt_motion_free_exact(&pl->params.arm, radius, &pl->points, lat, q,
-                               node_deg, EXACT_MAX_STEPS, QRT_WITNESS_AFTER))
+                               node_deg, QRT_EXACT_MAX_STEPS,
+                               QRT_WITNESS_AFTER))
         return;
     ends->node[ends->count] = node;
     ends->cost[ends->count] =
@@ -259,15 +264,14 @@ static void try_end(struct qrt_planner *pl, const double q[3], int ijk[3],
     ends->count++;
 }
 
-/* How many cells away from its nearest node a start or goal may be joined
- * to the lattice: past the 26 neighbours, shells 2 and 3 are tried, each
- * only when the one inside it gave nothing (and, as in the first, the
- * first node that joins is taken). The cells are conservative, so near a
- * surface many are blocked, and a free end amid them is otherwise
- * stranded. */
-#define JOIN_SHELLS 3
+/* A start or goal is connected to nodes up to QRT_CONNECT_SHELLS cells
+ * away from its nearest node: past the 26 neighbours, the next shells are
+ * tried, each only when the one inside it gave nothing (and, as in the
+ * first, the first node that connects is taken). The cells are
+ * conservative, so near a surface many are blocked, and a free end amid
+ * them is otherwise stranded. */
 
-/* Lattice nodes that q can be joined to: the corners of the grid cell
+/* Lattice nodes that q can be connected to: the corners of the grid cell
  * holding q, or, when none of those is free and reachable (q close to an
  * obstacle), the nodes around its nearest node, shell by shell. */
 static void collect_ends(struct qrt_planner *pl, const double q[3],
@@ -293,7 +297,7 @@ static void collect_ends(struct qrt_planner *pl, const double q[3],
             continue;
         try_end(pl, q, ijk, radius, ends);
     }
-    for (shell = 1; shell <= JOIN_SHELLS && ends->count == 0; shell++) {
+    for (shell = 1; shell <= QRT_CONNECT_SHELLS && ends->count == 0; shell++) {
         int side = 2 * shell + 1, cube = side * side * side;
         for (c = 0; c < cube && ends->count == 0; c++) {
             int d[3], ijk[3];
@@ -577,8 +581,8 @@ static int plan_swept(struct qrt_planner *pl, const struct qrt_target *start,
 }
 
 /* plan_swept for the calls that build only what they read: those leave
- * the mask partial whatever they did, so the next plain qrt_planner_plan
- * builds one first. */
+ * no whole mask whatever they did (a partial one stays kept), so the next
+ * plain qrt_planner_plan builds one first. */
 static int plan_swept_maskless(struct qrt_planner *pl,
                                const struct qrt_target *start,
                                const struct qrt_target *goal,
@@ -586,7 +590,8 @@ static int plan_swept_maskless(struct qrt_planner *pl,
 {
     if (!plan_swept(pl, start, goal, plan))
         return 0;
-    pl->mask_stale = 1;
+    if (pl->mask_state == QRT_MASK_WHOLE)
+        pl->mask_state = QRT_MASK_NONE;
     pl->cells_blocked = plan->cells_blocked = -1;
     return 1;
 }
@@ -596,7 +601,7 @@ static int plan_swept_maskless(struct qrt_planner *pl,
  * not fit beside the heap (the mask is then cleared and partial). */
 static int lazy_start(struct qrt_planner *pl, struct qrt_raster *r)
 {
-    int kept = pl->lazy_kept;
+    int kept = pl->mask_state == QRT_MASK_PARTIAL;
     if (!kept)
         start_mask(pl);
     qrt_raster_setup(r, &pl->mask, &pl->params.arm, pl->radius_m,
@@ -633,8 +638,7 @@ static int rows_from_clusters(struct qrt_planner *pl)
     if (!lazy_start(pl, &r))
         return 0;
     qrt_lazy_build_rows(pl, pl->check_rows);
-    qrt_lazy_end(pl);
-    pl->lazy_kept = 1;
+    (void)qrt_lazy_end(pl);
     return 1;
 }
 
@@ -651,15 +655,12 @@ static void build_rows_along(struct qrt_planner *pl,
     }
 }
 
-int qrt_planner_plan_straight(struct qrt_planner *pl,
-                              const struct qrt_target *start,
-                              const struct qrt_target *goal,
-                              struct qrt_plan *plan)
+/* qrt_planner_plan_straight on valid targets: 1 with *plan the straight
+ * motion when it is proved free, else 0. */
+static int straight_plan(struct qrt_planner *pl, const struct qrt_target *start,
+                         const struct qrt_target *goal, struct qrt_plan *plan)
 {
     double wp[2][3];
-    int rc;
-    if ((rc = check_targets(pl, start, goal)) != QRT_OK)
-        return rc;
     if (start->kind != QRT_TARGET_JOINTS || goal->kind != QRT_TARGET_JOINTS ||
         !pl->params.simplify || pl->points.dropped > 0)
         return 0;
@@ -679,6 +680,19 @@ int qrt_planner_plan_straight(struct qrt_planner *pl,
     copy_joints(plan->goal_deg, wp[1]);
     set_straight_plan(pl, plan, wp[0], wp[1]);
     return 1;
+}
+
+int qrt_planner_plan_straight(struct qrt_planner *pl,
+                              const struct qrt_target *start,
+                              const struct qrt_target *goal,
+                              struct qrt_plan *plan, int *straight)
+{
+    int rc;
+    *straight = 0;
+    if ((rc = check_targets(pl, start, goal)) != QRT_OK)
+        return rc;
+    *straight = straight_plan(pl, start, goal, plan);
+    return QRT_OK;
 }
 
 /* qrt_planner_plan on valid targets and a mask that is built, or being
@@ -752,7 +766,7 @@ int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
     int rc;
     if ((rc = check_targets(pl, start, goal)) != QRT_OK)
         return rc;
-    if (pl->mask_stale)
+    if (pl->mask_state != QRT_MASK_WHOLE)
         return QRT_E_INVALID;
     if (!plan_swept(pl, start, goal, plan))
         plan_on_mask(pl, start, goal, plan);
@@ -772,9 +786,6 @@ static int plan_lazily(struct qrt_planner *pl, const struct qrt_target *start,
     if (qrt_lazy_end(pl)) { /* the heap needed the clusters' room */
         pl->cells_blocked = qrt_mask_count_blocked(&pl->mask);
         plan->cells_blocked = pl->cells_blocked;
-        pl->mask_stale = 0;
-    } else {
-        pl->lazy_kept = 1;
     }
     return 1;
 }
@@ -818,7 +829,7 @@ static int check_waypoints(const struct qrt_planner *pl,
  * of the motion (a new obstacle on the goal) are asked first, a clearance
  * each, before advancement (whose witness search waits
  * QRT_WITNESS_AFTER steps: a path's first and last segments are often
- * joins that only advancement proves, in a step or two). */
+ * connections that only advancement proves, in a step or two). */
 static int segment_blocked(const struct qrt_planner *pl, const double a[3],
                            const double b[3])
 {
@@ -832,7 +843,7 @@ static int segment_blocked(const struct qrt_planner *pl, const double a[3],
                                &pl->mask.lat, a, b, 1.0))
         return 1;
     return !qrt_motion_free_exact(&pl->params.arm, radius, &pl->points,
-                                  &pl->mask.lat, a, b, EXACT_MAX_STEPS,
+                                  &pl->mask.lat, a, b, QRT_EXACT_MAX_STEPS,
                                   QRT_WITNESS_AFTER);
 }
 
@@ -853,7 +864,7 @@ int qrt_planner_check_path(const struct qrt_planner *pl,
 {
     int rc;
     *first_blocked = -1;
-    if (pl->mask_stale)
+    if (pl->mask_state != QRT_MASK_WHOLE)
         return QRT_E_INVALID;
     rc = check_waypoints(pl, waypoints_deg, n);
     if (rc != QRT_OK)
@@ -884,8 +895,7 @@ static int check_segments_lazily(struct qrt_planner *pl,
             break;
         }
     }
-    qrt_lazy_end(pl);
-    pl->lazy_kept = 1;
+    (void)qrt_lazy_end(pl);
     return 1;
 }
 

@@ -4,6 +4,7 @@
 #include <math.h>
 
 #include "qrtplan/status.h"
+#include "tuning.h"
 
 static long voxel_coord(double x, double voxel_m)
 {
@@ -150,18 +151,16 @@ void qrt_points_reset(struct qrt_points *pts, double reach_m)
     pts->reach_m = reach_m;
 }
 
-/* Points are taken in blocks of this many: a block is first stored and
+/* Points are taken in blocks of QRT_INTAKE_BLOCK: a block is first stored and
  * checked in float, in two loops with no branch and a fixed count, which
  * the compiler turns into vector code even at -O2, and kept as it is when
  * every point of it is surely within reach. Else, and for a batch's last,
  * shorter block, each point is tested in double. After a block that was
- * not all near, only every INTAKE_RETRY-th block is tried in float: where
+ * not all near, only every QRT_INTAKE_RETRY-th block is tried in float: where
  * the reach cuts through the scan (a box's walls) most blocks are mixed,
- * and trying each would cost half again as much as testing it. */
-#define INTAKE_BLOCK 64
-#define INTAKE_RETRY 8
+ * and a float try of a mixed block is work thrown away. */
 
-/* Store the INTAKE_BLOCK points at xyz as floats from entry `at` on and
+/* Store the QRT_INTAKE_BLOCK points at xyz as floats from entry `at` on and
  * tell whether every one is surely within reach: its stored float's
  * squared distance at most near2, which the caller sets under the squared
  * reach by more than float rounding can move it (see add_exact). A NaN
@@ -172,16 +171,16 @@ static int store_block(struct qrt_points *pts, long at, const double *xyz,
                        float near2)
 {
     int i, near = 0;
-    for (i = 0; i < INTAKE_BLOCK; i++) {
+    for (i = 0; i < QRT_INTAKE_BLOCK; i++) {
         pts->x[at + i] = (float)xyz[3 * i];
         pts->y[at + i] = (float)xyz[3 * i + 1];
         pts->z[at + i] = (float)xyz[3 * i + 2];
     }
-    for (i = 0; i < INTAKE_BLOCK; i++) {
+    for (i = 0; i < QRT_INTAKE_BLOCK; i++) {
         float x = pts->x[at + i], y = pts->y[at + i], z = pts->z[at + i];
         near += x * x + y * y + z * z <= near2 ? 1 : 0;
     }
-    return near == INTAKE_BLOCK;
+    return near == QRT_INTAKE_BLOCK;
 }
 
 /* Store from entry *count on, in order, the points of xyz[0 .. 3m - 1]
@@ -221,10 +220,10 @@ static int add_exact(struct qrt_points *pts, const double *xyz, long n)
      * (no block all near) for a reach that small. */
     float near2 = r2 > 1e-30 ? (float)(r2 * (1.0 - 1e-5)) : 0.0f;
     int last_mixed = 0;
-    for (i = 0; i < n; i += INTAKE_BLOCK) {
-        long m = n - i < INTAKE_BLOCK ? n - i : INTAKE_BLOCK;
-        if (m == INTAKE_BLOCK &&
-            (!last_mixed || (i / INTAKE_BLOCK) % INTAKE_RETRY == 0)) {
+    for (i = 0; i < n; i += QRT_INTAKE_BLOCK) {
+        long m = n - i < QRT_INTAKE_BLOCK ? n - i : QRT_INTAKE_BLOCK;
+        if (m == QRT_INTAKE_BLOCK &&
+            (!last_mixed || (i / QRT_INTAKE_BLOCK) % QRT_INTAKE_RETRY == 0)) {
             last_mixed = !store_block(pts, count, xyz + 3 * i, near2);
             if (!last_mixed) {
                 count += m;

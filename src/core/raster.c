@@ -266,7 +266,7 @@ static void trig_extremes(const struct qrt_raster *r, double cos_c,
  * the shoulder P1 at distance d, that every link-2 and link-3 contact must
  * come within reach2 / reach3 of. */
 struct plane {
-    struct qrt_disc dc; /* for link 3 (reach3 < 0 where it cannot touch) */
+    struct qrti_disc dc; /* for link 3 (reach3 < 0 where it cannot touch) */
     double d, reach2;
     int hit2, hit3;
 };
@@ -381,7 +381,7 @@ static int link3_rows(const struct qrt_raster *r, const struct plane *pl,
 /* Link 3 on sigma row is: the eta nodes whose psi = sigma + eta range
  * (+-2h over the box) meets the angles where link 3 comes within reach. */
 static int link3_row_ranges(const struct qrt_raster *r, int is,
-                            const struct qrt_disc *dc, int ranges[3][2])
+                            const struct qrti_disc *dc, int ranges[3][2])
 {
     double du = dc->cu - r->elbow[is][0], dz = dc->z - r->elbow[is][1];
     double w = sweep_half_width(sqrt(du * du + dz * dz), r->arm->link_m[2],
@@ -415,7 +415,7 @@ struct elbow_view {
 /* 0: link 3 cannot reach the disc for any psi; 2: it touches it for every
  * psi; 1: it depends on psi (v is filled in). */
 static inline int view_from(const struct qrt_raster *r, double eu, double ez,
-                            const struct qrt_disc *dc, struct elbow_view *v)
+                            const struct qrti_disc *dc, struct elbow_view *v)
 {
     double far, d2;
     v->wu = dc->cu - eu;
@@ -431,7 +431,7 @@ static inline int view_from(const struct qrt_raster *r, double eu, double ez,
 }
 
 static inline int view_from_elbow(const struct qrt_raster *r, int is,
-                                  const struct qrt_disc *dc,
+                                  const struct qrti_disc *dc,
                                   struct elbow_view *v)
 {
     return view_from(r, r->elbow[is][0], r->elbow[is][1], dc, v);
@@ -487,7 +487,7 @@ static inline int sector_meets(const struct qrt_raster *r, const double edge[4],
  * by under 2e-7 rad), so that these ranges hold every node the test
  * blocks and the ranges only save work, never decide. */
 static int link3_row_candidates(const struct qrt_raster *r, int is,
-                                const struct qrt_disc *dc, int ranges[3][2])
+                                const struct qrti_disc *dc, int ranges[3][2])
 {
     double du = dc->cu - r->elbow[is][0], dz = dc->z - r->elbow[is][1];
     double reach = dc->reach3 + 2.0 * r->sector_eps + 1e-6;
@@ -548,7 +548,7 @@ static int any_bit(const uint64_t *set, long lo, long hi, uint64_t flip)
  * blocks for dc, into out; returns whether there are any. Where the sector
  * test holds only. */
 static int disc_row_nodes(const struct qrt_raster *r, int is,
-                          const struct qrt_disc *dc, const uint64_t *row,
+                          const struct qrti_disc *dc, const uint64_t *row,
                           uint64_t out[QRT_ROW_WORDS])
 {
     struct elbow_view v;
@@ -574,7 +574,7 @@ static int disc_row_nodes(const struct qrt_raster *r, int is,
  * is: every open node of its candidate ranges that node_meets blocks (each
  * whole range where the sector test does not hold). */
 static void mark_disc_row(const struct qrt_raster *r, int is,
-                          const struct qrt_disc *dc, uint64_t *row)
+                          const struct qrti_disc *dc, uint64_t *row)
 {
     uint64_t nodes[QRT_ROW_WORDS];
     int ranges[3][2], n, w;
@@ -595,7 +595,7 @@ static void mark_disc_row(const struct qrt_raster *r, int is,
  * rounding, so it is not asked of each. */
 static void mark_member_nodes(const struct qrt_raster *r, int is,
                               const uint64_t ask[QRT_ROW_WORDS],
-                              const struct qrt_disc *md, int m, uint64_t *row)
+                              const struct qrti_disc *md, int m, uint64_t *row)
 {
     double all[4] = {0.0, 0.0, 0.0, 0.0};
     uint64_t left;
@@ -644,7 +644,7 @@ static void mark_member_nodes(const struct qrt_raster *r, int is,
 static void raster_plane(const struct qrt_raster *r, int ia, double rho,
                          const double p[3])
 {
-    uint64_t full[QRT_SIGMA_WORDS] = {0};
+    uint64_t full[QRTI_SIGMA_WORDS] = {0};
     struct plane pl;
     int rows[3][2], nrows, k, is;
     if (!plane_at(r, ia, p, rho, 0.0, &pl))
@@ -706,10 +706,10 @@ void qrt_raster_point(const struct qrt_raster *r, const double p[3])
 }
 
 static void set_alpha_bits(const struct qrt_raster *r, double rho, double phi,
-                           double reach, struct qrt_cluster_geom *g)
+                           double reach, struct qrti_cluster_geom *g)
 {
     int ranges[6][2], n, i, w;
-    for (w = 0; w < QRT_ALPHA_WORDS; w++)
+    for (w = 0; w < QRTI_ALPHA_WORDS; w++)
         g->alpha[w] = 0;
     n = alpha_window(r, rho, phi, reach, ranges);
     for (i = 0; i < n; i++)
@@ -719,7 +719,7 @@ static void set_alpha_bits(const struct qrt_raster *r, double rho, double phi,
 void qrt_raster_cluster_prepare(const struct qrt_raster *r,
                                 const struct qrt_point_axes *ax,
                                 const int32_t *members, int m,
-                                struct qrt_cluster_geom *g, double *mrho)
+                                struct qrti_cluster_geom *g, double *mrho)
 {
     double lo_x, lo_y, lo_z, hi_x, hi_y, hi_z, dx, dy, dz;
     int j;
@@ -776,13 +776,13 @@ static int member_plane(const struct qrt_raster *r, int ia,
 int qrt_raster_view_make(const struct qrt_raster *r,
                          const struct qrt_point_axes *ax,
                          const int32_t *members, const double *mrho,
-                         const struct qrt_cluster_geom *g, int ia,
-                         struct qrt_alpha_view *v)
+                         const struct qrti_cluster_geom *g, int ia,
+                         struct qrti_alpha_view *v)
 {
     struct plane cpl;
-    uint64_t full[QRT_SIGMA_WORDS];
+    uint64_t full[QRTI_SIGMA_WORDS];
     int rows[3][2], nrows, i, w, m = g->m;
-    for (w = 0; w < QRT_SIGMA_WORDS; w++)
+    for (w = 0; w < QRTI_SIGMA_WORDS; w++)
         v->rows[w] = full[w] = 0;
     if (!plane_at(r, ia, g->c, g->rho, m == 1 ? 0.0 : g->ball, &cpl))
         return 0; /* no member can touch links 2 or 3 here */
@@ -803,7 +803,7 @@ int qrt_raster_view_make(const struct qrt_raster *r,
     nrows = link3_rows(r, &cpl, rows);
     for (i = 0; i < nrows; i++)
         set_row_range(v->rows, rows[i][0], rows[i][1]);
-    for (w = 0; w < QRT_SIGMA_WORDS; w++)
+    for (w = 0; w < QRTI_SIGMA_WORDS; w++)
         v->rows[w] &= ~full[w];
     return 1;
 }
@@ -811,7 +811,7 @@ int qrt_raster_view_make(const struct qrt_raster *r,
 void qrt_raster_member_discs(const struct qrt_raster *r,
                              const struct qrt_point_axes *ax,
                              const int32_t *members, const double *mrho, int m,
-                             int ia, struct qrt_disc *md)
+                             int ia, struct qrti_disc *md)
 {
     int j;
     for (j = 0; j < m; j++) { /* only link 3's disc (plane_at's dc) */
@@ -825,7 +825,7 @@ void qrt_raster_member_discs(const struct qrt_raster *r,
 }
 
 static inline int view_row(const struct qrt_raster *r,
-                           const struct qrt_alpha_view *v, int m, int ia,
+                           const struct qrti_alpha_view *v, int m, int ia,
                            int is, uint64_t ask[QRT_ROW_WORDS])
 {
     uint64_t *row = r->mask->rows[ia][is];
@@ -849,7 +849,7 @@ static inline int view_row(const struct qrt_raster *r,
 
 static inline void view_members(const struct qrt_raster *r, int ia, int is,
                                 const uint64_t ask[QRT_ROW_WORDS],
-                                const struct qrt_disc *md, int m)
+                                const struct qrti_disc *md, int m)
 {
     uint64_t *row = r->mask->rows[ia][is];
     int j;
@@ -867,7 +867,7 @@ static inline void view_members(const struct qrt_raster *r, int ia, int is,
 }
 
 int qrt_raster_view_row(const struct qrt_raster *r,
-                        const struct qrt_alpha_view *v, int m, int ia, int is,
+                        const struct qrti_alpha_view *v, int m, int ia, int is,
                         uint64_t ask[QRT_ROW_WORDS])
 {
     return view_row(r, v, m, ia, is, ask);
@@ -875,7 +875,7 @@ int qrt_raster_view_row(const struct qrt_raster *r,
 
 void qrt_raster_view_members(const struct qrt_raster *r, int ia, int is,
                              const uint64_t ask[QRT_ROW_WORDS],
-                             const struct qrt_disc *md, int m)
+                             const struct qrti_disc *md, int m)
 {
     view_members(r, ia, is, ask, md, m);
 }
@@ -896,14 +896,14 @@ static inline void node_sector_of(const struct qrt_raster *r, int is, int ie,
 
 /* node_meets(view_from_elbow(dc)) with the node's sector loaded once,
  * and sector_meets' rejection of a disc beyond one edge's line tried
- * first: it ends nine in ten of the tests a free node's question makes (on
- * the box scenes). It gives what the full test gives: it is the same sum,
- * and a disc it rejects is neither out of link 3's reach (0 too) nor over
+ * first: it ends most of the tests a free node's query makes (the share is
+ * in docs/performance.md). It gives what the full test gives: it is the same
+ * sum, and a disc it rejects is neither out of link 3's reach (0 too) nor over
  * the elbow (view_from's 2), whose centre lies within reach of every line
  * through the elbow. */
 static inline int disc_meets_node(const struct qrt_raster *r,
                                   const struct node_sector *ns,
-                                  const struct qrt_disc *dc)
+                                  const struct qrti_disc *dc)
 {
     struct elbow_view ev;
     double wu = dc->cu - ns->eu, wz = dc->z - ns->ez;
@@ -919,7 +919,7 @@ static inline int disc_meets_node(const struct qrt_raster *r,
 }
 
 long qrt_raster_next_ball(const struct qrt_raster *r,
-                          const struct qrt_alpha_view *views,
+                          const struct qrti_alpha_view *views,
                           const uint64_t *row_views, long k, long n, int is,
                           int ie)
 {
@@ -951,7 +951,7 @@ long qrt_raster_next_ball(const struct qrt_raster *r,
 }
 
 int qrt_raster_node_members(const struct qrt_raster *r, int is, int ie,
-                            const struct qrt_disc *md, int m)
+                            const struct qrti_disc *md, int m)
 {
     struct node_sector ns;
     int j;
@@ -973,17 +973,17 @@ int qrt_raster_node_members(const struct qrt_raster *r, int is, int ie,
 void qrt_raster_cluster_at(const struct qrt_raster *r,
                            const struct qrt_point_axes *ax,
                            const int32_t *members, const double *mrho,
-                           const struct qrt_cluster_geom *g, int ia)
+                           const struct qrti_cluster_geom *g, int ia)
 {
-    struct qrt_alpha_view v;
-    struct qrt_disc md[QRT_CLUSTER_MAX];
+    struct qrti_alpha_view v;
+    struct qrti_disc md[QRT_CLUSTER_MAX];
     uint64_t ask[QRT_ROW_WORDS];
     int discs_ready = 0, w;
     if (!owns(r, ia) || !((g->alpha[ia >> 6] >> (ia & 63)) & 1U))
         return;
     if (!qrt_raster_view_make(r, ax, members, mrho, g, ia, &v))
         return;
-    for (w = 0; w < QRT_SIGMA_WORDS; w++) {
+    for (w = 0; w < QRTI_SIGMA_WORDS; w++) {
         uint64_t rows = v.rows[w]; /* the rows link 3 may reach, in order */
         for (; rows; rows &= rows - 1U) {
             int is = (w << 6) + qrt_lowest_bit(rows);
@@ -1002,7 +1002,7 @@ void qrt_raster_cluster(const struct qrt_raster *r,
                         const struct qrt_point_axes *ax, const int32_t *members,
                         int m)
 {
-    struct qrt_cluster_geom g;
+    struct qrti_cluster_geom g;
     double mrho[QRT_CLUSTER_MAX];
     int j, ia;
     if (m > QRT_CLUSTER_MAX) {

@@ -8,6 +8,7 @@
 #include "qrtplan/arm.h"
 #include "qrtplan/lattice.h"
 #include "qrtplan/planner.h"
+#include "tuning.h"
 
 /* One lattice axis, in radians. */
 struct qrt_axis {
@@ -74,9 +75,6 @@ void qrt_raster_only_block(struct qrt_raster *r, int ia, int s0, int s1);
  * point p (metres). */
 void qrt_raster_point(const struct qrt_raster *r, const double p[3]);
 
-/* Most points rastered together by qrt_raster_cluster. */
-#define QRT_CLUSTER_MAX 32
-
 /* The same result as qrt_raster_point on each of the m points
  * entries members[i] of ax (m <= QRT_CLUSTER_MAX), with less work when they lie
  * close together: the cells blocked are a superset of every cell a member truly
@@ -94,11 +92,11 @@ void qrt_raster_cluster(const struct qrt_raster *r,
 void qrt_raster_cluster_prepare(const struct qrt_raster *r,
                                 const struct qrt_point_axes *ax,
                                 const int32_t *members, int m,
-                                struct qrt_cluster_geom *g, double *mrho);
+                                struct qrti_cluster_geom *g, double *mrho);
 void qrt_raster_cluster_at(const struct qrt_raster *r,
                            const struct qrt_point_axes *ax,
                            const int32_t *members, const double *mrho,
-                           const struct qrt_cluster_geom *g, int ia);
+                           const struct qrti_cluster_geom *g, int ia);
 
 /* qrt_raster_cluster_at in steps, for rows built one at a time from views
  * kept between them (the same bits as qrt_raster_cluster_at on the same
@@ -124,23 +122,23 @@ void qrt_raster_cluster_at(const struct qrt_raster *r,
 int qrt_raster_view_make(const struct qrt_raster *r,
                          const struct qrt_point_axes *ax,
                          const int32_t *members, const double *mrho,
-                         const struct qrt_cluster_geom *g, int ia,
-                         struct qrt_alpha_view *v);
+                         const struct qrti_cluster_geom *g, int ia,
+                         struct qrti_alpha_view *v);
 int qrt_raster_view_row(const struct qrt_raster *r,
-                        const struct qrt_alpha_view *v, int m, int ia, int is,
+                        const struct qrti_alpha_view *v, int m, int ia, int is,
                         uint64_t ask[QRT_ROW_WORDS]);
 void qrt_raster_member_discs(const struct qrt_raster *r,
                              const struct qrt_point_axes *ax,
                              const int32_t *members, const double *mrho, int m,
-                             int ia, struct qrt_disc *md);
+                             int ia, struct qrti_disc *md);
 void qrt_raster_view_members(const struct qrt_raster *r, int ia, int is,
                              const uint64_t ask[QRT_ROW_WORDS],
-                             const struct qrt_disc *md, int m);
+                             const struct qrti_disc *md, int m);
 long qrt_raster_next_ball(const struct qrt_raster *r,
-                          const struct qrt_alpha_view *views,
+                          const struct qrti_alpha_view *views,
                           const uint64_t *row_views, long k, long n, int is,
                           int ie);
 int qrt_raster_node_members(const struct qrt_raster *r, int is, int ie,
-                            const struct qrt_disc *md, int m);
+                            const struct qrti_disc *md, int m);
 
 #endif

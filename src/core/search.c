@@ -45,7 +45,7 @@ static inline uint32_t key_bits(float key)
     return k.u;
 }
 
-static inline float key_of(const struct qrt_heap_entry *e)
+static inline float key_of(const struct qrti_heap_entry *e)
 {
     union {
         float f;
@@ -63,18 +63,18 @@ static inline float key_of(const struct qrt_heap_entry *e)
  * branch, where two compares of floats and a tie test mispredicted. The
  * entry keeps the key as bits behind the node, so that on a little-endian
  * target the compiler reads the two halves as one word. */
-static inline uint64_t heap_rank(const struct qrt_heap_entry *e)
+static inline uint64_t heap_rank(const struct qrti_heap_entry *e)
 {
     return ((uint64_t)e->key_bits << 32) | (uint32_t)e->node;
 }
 
-static int heap_less(const struct qrt_heap_entry *a,
-                     const struct qrt_heap_entry *b)
+static int heap_less(const struct qrti_heap_entry *a,
+                     const struct qrti_heap_entry *b)
 {
     return heap_rank(a) < heap_rank(b);
 }
 
-static void heap_place(struct qrt_planner *pl, long i, struct qrt_heap_entry e)
+static void heap_place(struct qrt_planner *pl, long i, struct qrti_heap_entry e)
 {
     pl->open.heap[i] = e;
     pl->heap_pos[e.node] = (int32_t)i;
@@ -85,7 +85,7 @@ static void heap_place(struct qrt_planner *pl, long i, struct qrt_heap_entry e)
  * 4i+4). Any heap pops the same sequence, the order being total. */
 static void sift_up(struct qrt_planner *pl, long i)
 {
-    struct qrt_heap_entry e = pl->open.heap[i];
+    struct qrti_heap_entry e = pl->open.heap[i];
     while (i > 0) {
         long parent = (i - 1) / 4;
         if (!heap_less(&e, &pl->open.heap[parent]))
@@ -98,8 +98,8 @@ static void sift_up(struct qrt_planner *pl, long i)
 
 static void sift_down(struct qrt_planner *pl, long i, long size)
 {
-    const struct qrt_heap_entry *h = pl->open.heap;
-    struct qrt_heap_entry e = h[i];
+    const struct qrti_heap_entry *h = pl->open.heap;
+    struct qrti_heap_entry e = h[i];
     const uint64_t rank = heap_rank(&e);
     for (;;) {
         long c = 4 * i + 1, least = c, j;
@@ -139,7 +139,7 @@ static void sift_down(struct qrt_planner *pl, long i, long size)
 static void push_or_lower(struct qrt_planner *pl, long *size, long node,
                           float key)
 {
-    struct qrt_heap_entry e;
+    struct qrti_heap_entry e;
     e.key_bits = key_bits(key);
     e.node = (int32_t)node;
     if (place_of(pl, node) >= 0) {
@@ -149,7 +149,7 @@ static void push_or_lower(struct qrt_planner *pl, long *size, long node,
         pl->search_seen[node >> 6] |= 1ULL << (node & 63);
         /* the lazily built mask keeps its clusters in the heap's tail:
          * finish the mask before the heap grows into them */
-        if (pl->lazy && *size >= QRT_LAZY_HEAP)
+        if (qrt_lazy_building(pl) && *size >= QRTI_LAZY_HEAP)
             qrt_lazy_finish(pl);
         pl->open.heap[*size] = e;
         sift_up(pl, (*size)++);
@@ -183,7 +183,7 @@ struct estimate {
     double slack; /* how far a goal candidate may lie from target */
     /* when set: the least octile distance to its rim plus the rim node's
      * cost (perimeter search), instead of the distance to target */
-    const struct qrt_goal_region *region;
+    const struct qrti_goal_region *region;
 };
 
 static inline double octile_to(const struct qrt_lattice *lat, const int ijk[3],
@@ -202,7 +202,7 @@ static inline double octile_to(const struct qrt_lattice *lat, const int ijk[3],
  * whole component was settled). In floats over the whole table, without
  * branches, so that the compiler may use vector instructions; the rounding
  * (under 1e-5 steps) is far inside the estimate's slack. */
-static double region_estimate(const struct qrt_goal_region *g,
+static double region_estimate(const struct qrti_goal_region *g,
                               const struct qrt_lattice *lat, const int ijk[3],
                               long node)
 {
@@ -376,7 +376,7 @@ static uint32_t moves_after(const struct moves *mv, unsigned came)
 /* The moves from ijk that stay on the lattice: all but those stepping off
  * a face, alpha's ends being faces only where it does not wrap. A node on
  * a face then takes its moves as an inside node does, but for the index of
- * a move across alpha's seam. */
+ * a move across alpha's wrap (where node n[0] is node 0 again). */
 static uint32_t moves_on(const struct qrt_lattice *lat, const struct moves *mv,
                          const int ijk[3])
 {
@@ -392,9 +392,9 @@ static uint32_t moves_on(const struct qrt_lattice *lat, const struct moves *mv,
 }
 
 /* The turns to add to alpha coordinate a, one past an end of the lattice
- * after a move across alpha's seam (moves_on lets one only where alpha
+ * after a move across alpha's wrap (moves_on lets one only where alpha
  * wraps): +1 below node 0, -1 above the last, else 0. */
-static inline int seam_turns(const struct qrt_lattice *lat, int a)
+static inline int wrap_turns(const struct qrt_lattice *lat, int a)
 {
     if (a < 0)
         return 1;
@@ -409,7 +409,7 @@ static void search_from(struct qrt_planner *pl, const struct moves *mv,
                         const struct qrt_ends *seeds,
                         const struct qrt_ends *goals,
                         const struct estimate *est,
-                        struct qrt_goal_region *region,
+                        struct qrti_goal_region *region,
                         struct qrt_search_result *res)
 {
     const struct qrt_lattice *lat = &pl->mask.lat;
@@ -418,7 +418,7 @@ static void search_from(struct qrt_planner *pl, const struct moves *mv,
     double best = HUGE_VAL;
     int inside;
     /* the alpha nodes of the goals: a node on none is no goal */
-    uint64_t goal_alpha[QRT_ALPHA_WORDS] = {0};
+    uint64_t goal_alpha[QRTI_ALPHA_WORDS] = {0};
 
     for (i = 0; i < (n_nodes + 63) / 64; i++)
         pl->search_seen[i] = 0;
@@ -443,7 +443,7 @@ static void search_from(struct qrt_planner *pl, const struct moves *mv,
     }
 
     while (size > 0) {
-        struct qrt_heap_entry top = pl->open.heap[0];
+        struct qrti_heap_entry top = pl->open.heap[0];
         long u = top.node;
         int ijk[3], slot, d;
         uint32_t todo;
@@ -493,7 +493,7 @@ static void search_from(struct qrt_planner *pl, const struct moves *mv,
             d = qrt_lowest_bit(todo);
             v = u + mv->delta[d];
             if (!inside)
-                v += turn * seam_turns(lat, ijk[0] + mv->offset[d][0]);
+                v += turn * wrap_turns(lat, ijk[0] + mv->offset[d][0]);
             /* the tests by index first: most moves end at one of them */
             place = place_of(pl, v);
             if (place == -2)
@@ -505,7 +505,7 @@ static void search_from(struct qrt_planner *pl, const struct moves *mv,
             nb[1] = ijk[1] + mv->offset[d][1];
             nb[2] = ijk[2] + mv->offset[d][2];
             if (!inside)
-                nb[0] += lat->n[0] * seam_turns(lat, nb[0]);
+                nb[0] += lat->n[0] * wrap_turns(lat, nb[0]);
             /* a bit set is final even in a row not built yet; a node not
              * known yet is checked when taken */
             if (qrt_mask_bit(&pl->mask, nb))
@@ -537,7 +537,7 @@ static int free_outside(struct qrt_planner *pl, long v, const int nb[3],
 /* The rim of the region just settled: its nodes with a free neighbour
  * outside it. Read before the next search clears the seen bits. */
 static void find_rim(struct qrt_planner *pl, const struct moves *mv,
-                     struct qrt_goal_region *g)
+                     struct qrti_goal_region *g)
 {
     const struct qrt_lattice *lat = &pl->mask.lat;
     int i, d, ask;
@@ -568,7 +568,7 @@ static void find_rim(struct qrt_planner *pl, const struct moves *mv,
 /* Does the region's estimate say more than the octile one at any seed? If
  * not, it would cost more than it saves. */
 static int region_pays(const struct qrt_planner *pl, const struct estimate *est,
-                       const struct qrt_goal_region *g,
+                       const struct qrti_goal_region *g,
                        const struct qrt_ends *seeds)
 {
     const struct qrt_lattice *lat = &pl->mask.lat;
@@ -590,13 +590,14 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
                 struct qrt_search_result *res)
 {
     const struct qrt_lattice *lat = &pl->mask.lat;
-    struct qrt_goal_region *region = &pl->goal_region;
+    struct qrti_goal_region *region = &pl->goal_region;
     struct moves mv;
     struct estimate est;
     int i;
 
-    if (!pl->lazy)
-        pl->lazy_kept = 0; /* the heap may use the whole array */
+    /* the heap may use the whole array, where clusters would be kept */
+    if (!qrt_lazy_building(pl) && pl->mask_state == QRT_MASK_PARTIAL)
+        pl->mask_state = QRT_MASK_NONE;
     init_moves(lat, &mv);
     init_estimate(&est, lat, goals, use_astar);
     res->found = 0;
@@ -604,7 +605,7 @@ void qrt_search(struct qrt_planner *pl, const struct qrt_ends *seeds,
     res->cost = HUGE_VAL;
     res->expanded = 0;
     region->settled = region->rim = region->used = 0;
-    for (i = 0; i < QRT_ALPHA_WORDS; i++)
+    for (i = 0; i < QRTI_ALPHA_WORDS; i++)
         region->alpha[i] = 0;
     if (est.active) {
         struct estimate none = est;
@@ -628,7 +629,7 @@ long qrt_search_path(struct qrt_planner *pl, long goal_node)
     for (;;) {
         int ijk[3], off[3], prev[3], j;
         unsigned dir = pl->parent_dir[node];
-        if (pl->lazy && len >= QRT_LAZY_HEAP)
+        if (qrt_lazy_building(pl) && len >= QRTI_LAZY_HEAP)
             qrt_lazy_finish(pl); /* as in push_or_lower */
         pl->open.heap[len++].node = (int32_t)node;
         if (dir == QRT_NO_PARENT)

@@ -3,8 +3,8 @@
 #define QRT_CORE_SEARCH_H
 
 #include "qrtplan/planner.h"
+#include "tuning.h"
 
-#define QRT_MAX_ENDS 8
 #define QRT_NO_PARENT 255u
 
 /* Lattice nodes where a path may enter (seeds) or leave (goals), each with

@@ -7,46 +7,47 @@
 #include "fastmath.h"
 #include "geom.h"
 #include "motion.h"
+#include "tuning.h"
 
-/* The stored configurations lie about this far apart (metres) for the
- * fastest-moving point of the arm, at most QRT_SWEEP_LEAVES of them: a
- * point that clear of the arm is passed with them alone, a closer one
- * needs configurations computed for it. */
-#define LEAF_SPACING_M 0.01
-/* Steps the proof may take for one point, and over all points (this many
- * a point, plus a start): a motion that brushes past points is left to the
- * mask, which decides it for less. */
-#define STEPS_PER_POINT 64
-#define STEPS_MEAN 4
-#define STEPS_START 1024
+/* The tuning of this proof is in tuning.h (QRT_SWEEP_*): the stored poses
+ * lie QRT_SWEEP_POSE_SPACING_M apart for the arm's fastest point, at most
+ * QRTI_SWEEP_POSES of them (a point that clear of the arm is passed with
+ * them alone, a closer one needs configurations computed for it); the
+ * proof takes at most QRT_SWEEP_STEPS_PER_POINT steps for one point and
+ * QRT_SWEEP_STEPS_MEAN a point (plus QRT_SWEEP_STEPS_START) over all, and
+ * a motion that brushes past points is left to the mask, which decides it
+ * for less.
+ *
+ * Every QRT_SWEEP_SAMPLE_STRIDE-th point is a sample and is tried first: a
+ * motion is seldom blocked by one point alone, so a blocked one is usually
+ * told from a sample. The samples near the sweep are tried
+ * QRT_SWEEP_SAMPLE_RUN at a time, by one ball that holds them, then one by
+ * one: such samples span a stretch of a scan that is often a patch small
+ * enough for the ball to clear, and a run that fails costs one ball more.
+ * The off-sweep test is made on blocks of QRT_SWEEP_OFF_BLOCK entries (a
+ * multiple of the stride, so that a block's samples are its entries 0,
+ * stride, ...).
+ *
+ * Points near the sweep, taken in the table's order, are tried first as
+ * runs of QRT_SWEEP_RUN_POINTS by one ball that holds them all, then as
+ * halves, each by its own ball, down to groups of QRT_SWEEP_RUN_GROUP
+ * points: a scan's points lie in its order along surfaces, so such a run
+ * is often a small patch that clears the arm as a whole. A ball wider than
+ * QRT_SWEEP_RUN_BALL_M is not tried; a ball's proof takes at most
+ * QRT_SWEEP_RUN_STEPS steps (a run that brushes past the arm is quicker
+ * told point by point). */
+
 /* Clearance at or under this (metres) counts as contact, as in motion.c. */
 #define CONTACT_M 1e-7
-/* Every 16th point is tried first: a motion is seldom blocked by one
- * point alone, so a blocked one is usually told from a sample. The samples
- * near the sweep are tried SAMPLE_RUN at a time, by one ball that holds
- * them, then one by one: 8 samples span 128 entries, in a scan often a patch
- * small enough for the ball to clear (one by one they took a sixth of an
- * open shelf's plan), and a run that fails costs one ball more than before. */
-#define SAMPLE_STRIDE 16
-#define SAMPLE_RUN 8
-/* The off-sweep test is made on blocks of this many entries (a multiple of
- * SAMPLE_STRIDE, so that a block's samples are its entries 0, 16, ...). */
-#define OFF_BLOCK 64
-#define OFF_SPANS (OFF_BLOCK / SAMPLE_STRIDE)
-/* Points near the sweep, taken in the table's order, are tried first as
- * runs of this many by one ball that holds them all, then as halves, each
- * by its own ball, down to groups of RUN_GROUP points: a scan's points lie in
- * its order along surfaces, so such a run is often a small patch that clears
- * the arm as a whole. A ball wider than RUN_BALL_M is not tried; a ball's
- * proof takes at most RUN_STEPS steps (a run that brushes past the arm is
- * quicker told point by point). RUN_LEVELS is how many sizes of ball a
- * run is tried with (32, 16, 8 and 4 points), and bounds the spans
- * waiting to be tried (one more than the halvings). */
-#define RUN_POINTS 32
-#define RUN_GROUP 4
+#define OFF_SPANS (QRT_SWEEP_OFF_BLOCK / QRT_SWEEP_SAMPLE_STRIDE)
+/* How many sizes of ball a run is tried with (from QRT_SWEEP_RUN_POINTS
+ * halved down to QRT_SWEEP_RUN_GROUP), which bounds the spans waiting to
+ * be tried (one more than the halvings). */
 #define RUN_LEVELS 4
-#define RUN_BALL_M 0.3
-#define RUN_STEPS 32
+#if (QRT_SWEEP_RUN_POINTS >> (RUN_LEVELS - 1)) != QRT_SWEEP_RUN_GROUP
+#error                                                                         \
+    "RUN_LEVELS must count the halvings from QRT_SWEEP_RUN_POINTS to QRT_SWEEP_RUN_GROUP"
+#endif
 
 /* Is a point off the sweep, farther than W from the arm's plane all along
  * the motion, by the plane's two ends alone? |w| = rho |sin(phi - alpha)|
@@ -82,14 +83,14 @@ struct sweep {
                     of every link */
     struct float_ends ends; /* for float_off */
     long n;                 /* stored configurations, at t = (i + 0.5) / n */
-    struct qrt_sweep_leaf *leaf;
+    struct qrti_sweep_pose *pose;
     long steps_left;
     int max_steps; /* for one point or ball */
     /* how often a ball of each size (level 0 the whole run) cleared */
     long balls_cleared[RUN_LEVELS], balls_failed[RUN_LEVELS];
 };
 
-static void leaf_at(const struct sweep *s, double t, struct qrt_sweep_leaf *lf)
+static void pose_at(const struct sweep *s, double t, struct qrti_sweep_pose *lf)
 {
     double a = s->a0 + t * s->da, sg = s->s0 + t * s->ds,
            ps = s->p0 + t * s->dp;
@@ -115,17 +116,17 @@ static void turn(double *c, double *sn, double cd, double sd)
  * next one turned from the one before by the same angles. The rounding
  * adds about 1e-16 rad a step, some 1e-13 m over 256 steps at the arm's
  * reach: the CONTACT_M kept off every clearance covers it many times. */
-static void store_leaves(const struct sweep *s, struct qrt_sweep_leaf *leaf)
+static void store_poses(const struct sweep *s, struct qrti_sweep_pose *pose)
 {
     double inv_n = 1.0 / (double)s->n, ca = cos(s->da * inv_n),
            sa = sin(s->da * inv_n), cs = cos(s->ds * inv_n),
            ss = sin(s->ds * inv_n), cp = cos(s->dp * inv_n),
            sp = sin(s->dp * inv_n);
     long i;
-    leaf_at(s, 0.5 * inv_n, &leaf[0]);
+    pose_at(s, 0.5 * inv_n, &pose[0]);
     for (i = 1; i < s->n; i++) {
-        struct qrt_sweep_leaf *lf = &leaf[i];
-        *lf = leaf[i - 1];
+        struct qrti_sweep_pose *lf = &pose[i];
+        *lf = pose[i - 1];
         turn(&lf->ca, &lf->sa, ca, sa);
         turn(&lf->cs, &lf->ss, cs, ss);
         turn(&lf->cp, &lf->sp, cp, sp);
@@ -152,8 +153,8 @@ static double seg_dist2(double u, double z, double u0, double z0, double cu,
 /* For how long (in t, either way) from configuration lf every link stays
  * clear of p: the least over the links of clearance over speed. At or
  * under 0 where some link is in contact at lf itself. */
-static double clear_time(const struct sweep *s, const struct qrt_sweep_leaf *lf,
-                         const double p[3])
+static double clear_time(const struct sweep *s,
+                         const struct qrti_sweep_pose *lf, const double p[3])
 {
     /* p in the arm's plane: u along the arm's bearing, w across it */
     double u = p[0] * lf->ca + p[1] * lf->sa, w = p[1] * lf->ca - p[0] * lf->sa,
@@ -177,7 +178,7 @@ static double clear_time(const struct sweep *s, const struct qrt_sweep_leaf *lf,
 
 /* Is p farther than reach[k] from link k at configuration lf, for every
  * link? (No roots: most points pass this once for their whole window.) */
-static int clear_by(const struct sweep *s, const struct qrt_sweep_leaf *lf,
+static int clear_by(const struct sweep *s, const struct qrti_sweep_pose *lf,
                     const double p[3], const double reach[3])
 {
     double u = p[0] * lf->ca + p[1] * lf->sa, w = p[1] * lf->ca - p[0] * lf->sa,
@@ -209,7 +210,7 @@ static int advance(struct sweep *s, const double p[3], double tl, double th)
     far = ti - tl > th - ti ? ti - tl : th - ti;
     for (k = 0; k < 3; k++)
         reach[k] = s->radius[k] + CONTACT_M + s->speed[k] * far;
-    if (clear_by(s, &s->leaf[i], p, reach))
+    if (clear_by(s, &s->pose[i], p, reach))
         return 1;
     for (steps = 0; steps < s->max_steps; steps++) {
         double dt;
@@ -219,12 +220,12 @@ static int advance(struct sweep *s, const double p[3], double tl, double th)
         if (i >= s->n)
             i = s->n - 1;
         ti = ((double)i + 0.5) / (double)s->n;
-        dt = clear_time(s, &s->leaf[i], p);
+        dt = clear_time(s, &s->pose[i], p);
         if (dt > fabs(t - ti)) {
             t = ti + dt;
         } else {
-            struct qrt_sweep_leaf here;
-            leaf_at(s, t, &here);
+            struct qrti_sweep_pose here;
+            pose_at(s, t, &here);
             dt = clear_time(s, &here, p);
             if (dt <= 0.0)
                 return 0;
@@ -245,7 +246,7 @@ static int near_clear(struct sweep *s, const double p[3])
     double rho, beta, d0, lo, hi;
     long k, k_lo, k_hi;
     if (s->da == 0.0) { /* the plane stays put */
-        double w = p[1] * s->leaf[0].ca - p[0] * s->leaf[0].sa;
+        double w = p[1] * s->pose[0].ca - p[0] * s->pose[0].sa;
         return fabs(w) > s->wall || advance(s, p, 0.0, 1.0);
     }
     rho = sqrt(p[0] * p[0] + p[1] * p[1]);
@@ -317,21 +318,21 @@ static int float_off(float x, float y, const struct float_ends *f)
     return fabsf(along_sum) - fabsf(along_diff) > f->wall2;
 }
 
-/* Of the OFF_BLOCK entries from `at` on, mark in near[] those float_off
- * does not put off the sweep, and count them in each span of
- * SAMPLE_STRIDE entries, leaving out the span's first (its sample, tried
- * before, with the other samples). Loops of fixed count with no branch over two
- * axes: the compiler makes them 4 lanes wide. */
+/* Of the QRT_SWEEP_OFF_BLOCK entries from `at` on, mark in near[] those
+ * float_off does not put off the sweep, and count them in each span of
+ * QRT_SWEEP_SAMPLE_STRIDE entries, leaving out the span's first (its sample,
+ * tried before, with the other samples). Loops of fixed count with no branch
+ * over two axes: the compiler makes them 4 lanes wide. */
 static void mark_near(const struct qrt_point_axes *ax, long at,
-                      const struct float_ends *f, int near[OFF_BLOCK],
+                      const struct float_ends *f, int near[QRT_SWEEP_OFF_BLOCK],
                       int count[OFF_SPANS])
 {
     int b, j;
     for (b = 0; b < OFF_SPANS; b++) {
-        const float *x = ax->x + at + b * SAMPLE_STRIDE,
-                    *y = ax->y + at + b * SAMPLE_STRIDE;
-        int *mark = near + b * SAMPLE_STRIDE, c = 0;
-        for (j = 0; j < SAMPLE_STRIDE; j++) {
+        const float *x = ax->x + at + b * QRT_SWEEP_SAMPLE_STRIDE,
+                    *y = ax->y + at + b * QRT_SWEEP_SAMPLE_STRIDE;
+        int *mark = near + b * QRT_SWEEP_SAMPLE_STRIDE, c = 0;
+        for (j = 0; j < QRT_SWEEP_SAMPLE_STRIDE; j++) {
             mark[j] = float_off(x[j], y[j], f) ? 0 : 1;
             c += mark[j];
         }
@@ -370,8 +371,8 @@ static void box_of(const struct qrt_point_axes *ax, const long *run, int n,
 }
 
 /* Are the points in box b clear of the arm all along the motion, as one
- * ball about its centre? No when the ball is wider than RUN_BALL_M. A point
- * within r of the centre c comes no closer to a link than c comes less r,
+ * ball about its centre? No when the ball is wider than QRT_SWEEP_RUN_BALL_M. A
+ * point within r of the centre c comes no closer to a link than c comes less r,
  * so c kept farther than radius + r from every link keeps every member
  * farther than radius. */
 static int ball_clear(const struct sweep *s, struct sweep *ball,
@@ -387,7 +388,7 @@ static int ball_clear(const struct sweep *s, struct sweep *ball,
         r2 += half * half;
     }
     r = sqrt(r2) * (1.0 + 1e-12) + 1e-12;
-    if (r <= RUN_BALL_M) {
+    if (r <= QRT_SWEEP_RUN_BALL_M) {
         for (k = 0; k < 3; k++)
             ball->radius[k] = s->radius[k] + r;
         ball->wall = s->wall + r;
@@ -410,24 +411,27 @@ static void box_merge(struct box *into, const struct box *b)
 }
 
 /* The table's entries run[0..n-1], none off the sweep by its ends: as one ball,
- * else as two halves, each as a ball, and so on down to RUN_GROUP points
- * (balls of at most `levels` sizes), else one by one; depth first, from a small
- * stack of spans (no recursion). Every span starts on a group's first point and
- * ends at a group's end or at n, so its groups' boxes merged are exactly its
- * box. Balls of a size are tried while they clear at least a third of the time
- * (and on every 16th run, so that a scene whose first runs were wide can
- * come back to them): in a table with no order in space, or where the
+ * else as two halves, each as a ball, and so on down to QRT_SWEEP_RUN_GROUP
+ * points (balls of at most `levels` sizes), else one by one; depth first, from
+ * a small stack of spans (no recursion). Every span starts on a group's first
+ * point and ends at a group's end or at n, so its groups' boxes merged are
+ * exactly its box. Balls of a size are tried while they clear at least a third
+ * of the time (and on every 16th run, so that a scene whose first runs were
+ * wide can come back to them): in a table with no order in space, or where the
  * motion brushes past the points, their boxes are only cost. */
 static int run_clear(struct sweep *s, struct sweep *ball,
                      const struct qrt_point_axes *ax, const long *run, int n,
                      long runs, int levels)
 {
-    struct box group[RUN_POINTS / RUN_GROUP], b;
+    struct box group[QRT_SWEEP_RUN_POINTS / QRT_SWEEP_RUN_GROUP], b;
     int first_of[RUN_LEVELS], count_of[RUN_LEVELS], level_of[RUN_LEVELS];
-    int groups = (n + RUN_GROUP - 1) / RUN_GROUP, top = 1, i;
+    int groups = (n + QRT_SWEEP_RUN_GROUP - 1) / QRT_SWEEP_RUN_GROUP, top = 1,
+        i;
     for (i = 0; i < groups; i++) {
-        int first = i * RUN_GROUP;
-        box_of(ax, run + first, n - first < RUN_GROUP ? n - first : RUN_GROUP,
+        int first = i * QRT_SWEEP_RUN_GROUP;
+        box_of(ax, run + first,
+               n - first < QRT_SWEEP_RUN_GROUP ? n - first
+                                               : QRT_SWEEP_RUN_GROUP,
                &group[i]);
     }
     first_of[0] = 0;
@@ -442,23 +446,25 @@ static int run_clear(struct sweep *s, struct sweep *ball,
         if (m > 1 &&
             (ball->balls_failed[level] <= 2 * ball->balls_cleared[level] + 16 ||
              runs % 16 == 0)) {
-            b = group[first / RUN_GROUP];
-            for (i = first / RUN_GROUP + 1;
-                 i < (first + m + RUN_GROUP - 1) / RUN_GROUP; i++)
+            b = group[first / QRT_SWEEP_RUN_GROUP];
+            for (i = first / QRT_SWEEP_RUN_GROUP + 1;
+                 i <
+                 (first + m + QRT_SWEEP_RUN_GROUP - 1) / QRT_SWEEP_RUN_GROUP;
+                 i++)
                 box_merge(&b, &group[i]);
             if (ball_clear(s, ball, &b, level))
                 continue;
         }
         /* (the level's test is never needed: halving 32 points three
          * times leaves at most 4; it keeps the stack's bound plain) */
-        if (m <= RUN_GROUP || level + 1 >= levels) {
+        if (m <= QRT_SWEEP_RUN_GROUP || level + 1 >= levels) {
             for (i = first; i < first + m; i++)
                 if (!stored_near_clear(s, ax, run[i]))
                     return 0;
             continue;
         }
         /* the halves, split on a group's edge; the first is taken first */
-        half = (m / RUN_GROUP + 1) / 2 * RUN_GROUP;
+        half = (m / QRT_SWEEP_RUN_GROUP + 1) / 2 * QRT_SWEEP_RUN_GROUP;
         first_of[top] = first + half;
         count_of[top] = m - half;
         level_of[top++] = level + 1;
@@ -472,14 +478,15 @@ static int run_clear(struct sweep *s, struct sweep *ball,
 int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
                    const struct qrt_points *pts, const struct qrt_lattice *lat,
                    const double a_deg[3], const double b_deg[3],
-                   struct qrt_sweep_leaf *leaves)
+                   struct qrti_sweep_pose *poses)
 {
     struct sweep s, ball, sample_ball;
     struct float_ends ends;
     struct qrt_point_axes ax = qrt_points_axes(pts);
     double d[3], fastest;
-    /* a span adds at most SAMPLE_STRIDE - 1 to fewer than RUN_POINTS */
-    long i, run[RUN_POINTS + SAMPLE_STRIDE], runs = 0;
+    /* a span adds at most QRT_SWEEP_SAMPLE_STRIDE - 1 to fewer than
+     * QRT_SWEEP_RUN_POINTS */
+    long i, run[QRT_SWEEP_RUN_POINTS + QRT_SWEEP_SAMPLE_STRIDE], runs = 0;
     int k, n = 0;
     qrt_motion_delta(lat, a_deg, b_deg, d);
     qrt_motion_link_speeds(arm, d, s.speed);
@@ -504,30 +511,31 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
     }
     float_ends_of(s.link, s.wall, s.a0, s.da, &s.ends);
     s.n = 1;
-    while (s.n < QRT_SWEEP_LEAVES && (double)s.n * LEAF_SPACING_M < fastest)
+    while (s.n < QRTI_SWEEP_POSES &&
+           (double)s.n * QRT_SWEEP_POSE_SPACING_M < fastest)
         s.n *= 2;
-    s.leaf = leaves;
-    s.steps_left = STEPS_MEAN * pts->count + STEPS_START;
-    s.max_steps = STEPS_PER_POINT;
+    s.pose = poses;
+    s.steps_left = QRT_SWEEP_STEPS_MEAN * pts->count + QRT_SWEEP_STEPS_START;
+    s.max_steps = QRT_SWEEP_STEPS_PER_POINT;
     for (k = 0; k < RUN_LEVELS; k++)
         s.balls_cleared[k] = s.balls_failed[k] = 0;
-    store_leaves(&s, leaves);
-    for (k = 0; k < RUN_POINTS + SAMPLE_STRIDE; k++)
+    store_poses(&s, poses);
+    for (k = 0; k < QRT_SWEEP_RUN_POINTS + QRT_SWEEP_SAMPLE_STRIDE; k++)
         run[k] = 0; /* (the rest of a run is moved as a fixed count) */
     /* the balls' steps are counted apart: they only save work; the
      * samples' balls keep their own counts of how often they clear */
     ball = s;
-    ball.max_steps = RUN_STEPS;
-    ball.steps_left = STEPS_MEAN * pts->count + STEPS_START;
+    ball.max_steps = QRT_SWEEP_RUN_STEPS;
+    ball.steps_left = QRT_SWEEP_STEPS_MEAN * pts->count + QRT_SWEEP_STEPS_START;
     sample_ball = ball;
     /* what the off-sweep test reads, in a local (run_clear is passed &s,
      * so s's fields would be loaded again for every point) */
     ends = s.ends;
-    for (i = 0; i < pts->count; i += SAMPLE_STRIDE) {
+    for (i = 0; i < pts->count; i += QRT_SWEEP_SAMPLE_STRIDE) {
         if (float_off(ax.x[i], ax.y[i], &ends))
             continue;
         run[n++] = i;
-        if (n == SAMPLE_RUN) {
+        if (n == QRT_SWEEP_SAMPLE_RUN) {
             if (!run_clear(&s, &sample_ball, &ax, run, n, runs++, 1))
                 return 0;
             n = 0;
@@ -539,37 +547,40 @@ int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
     runs = 0;
     /* every point but the samples: in blocks marked by mark_near, then the
      * last entries one by one */
-    for (i = 0; i + OFF_BLOCK <= pts->count; i += OFF_BLOCK) {
-        int near[OFF_BLOCK], count[OFF_SPANS], b, j;
+    for (i = 0; i + QRT_SWEEP_OFF_BLOCK <= pts->count;
+         i += QRT_SWEEP_OFF_BLOCK) {
+        int near[QRT_SWEEP_OFF_BLOCK], count[OFF_SPANS], b, j;
         mark_near(&ax, i, &ends, near, count);
         for (b = 0; b < OFF_SPANS; b++) {
-            const int *mark = near + b * SAMPLE_STRIDE;
-            long first = i + b * SAMPLE_STRIDE;
+            const int *mark = near + b * QRT_SWEEP_SAMPLE_STRIDE;
+            long first = i + b * QRT_SWEEP_SAMPLE_STRIDE;
             if (count[b] == 0)
                 continue;
             /* with no branch: every entry is written, the near ones kept */
-            for (j = 1; j < SAMPLE_STRIDE; j++) {
+            for (j = 1; j < QRT_SWEEP_SAMPLE_STRIDE; j++) {
                 run[n] = first + j;
                 n += mark[j];
             }
-            if (n >= RUN_POINTS) { /* a run of RUN_POINTS; the rest kept */
-                if (!run_clear(&s, &ball, &ax, run, RUN_POINTS, runs++,
-                               RUN_LEVELS))
+            if (n >= QRT_SWEEP_RUN_POINTS) { /* a run of QRT_SWEEP_RUN_POINTS;
+                                                the rest kept */
+                if (!run_clear(&s, &ball, &ax, run, QRT_SWEEP_RUN_POINTS,
+                               runs++, RUN_LEVELS))
                     return 0;
-                n -= RUN_POINTS;
-                /* the rest, at most SAMPLE_STRIDE - 2 (n was under
-                 * RUN_POINTS before the span), moved as a fixed count: no
-                 * call to memmove */
-                for (j = 0; j < SAMPLE_STRIDE - 2; j++)
-                    run[j] = run[RUN_POINTS + j];
+                n -= QRT_SWEEP_RUN_POINTS;
+                /* the rest, at most QRT_SWEEP_SAMPLE_STRIDE - 2 (n was under
+                 * QRT_SWEEP_RUN_POINTS before the span), moved as a fixed
+                 * count: no call to memmove */
+                for (j = 0; j < QRT_SWEEP_SAMPLE_STRIDE - 2; j++)
+                    run[j] = run[QRT_SWEEP_RUN_POINTS + j];
             }
         }
     }
     for (; i < pts->count; i++) {
-        if (i % SAMPLE_STRIDE == 0 || float_off(ax.x[i], ax.y[i], &ends))
+        if (i % QRT_SWEEP_SAMPLE_STRIDE == 0 ||
+            float_off(ax.x[i], ax.y[i], &ends))
             continue;
         run[n++] = i;
-        if (n == RUN_POINTS) {
+        if (n == QRT_SWEEP_RUN_POINTS) {
             if (!run_clear(&s, &ball, &ax, run, n, runs++, RUN_LEVELS))
                 return 0;
             n = 0;

@@ -23,10 +23,10 @@
  * table's order as runs of 8, each first as one ball that holds them (the
  * links' radii grown by the ball's), then as two half runs, then alone: a
  * scan lists its points along surfaces, so a run is mostly a small patch.
- * leaves is scratch for QRT_SWEEP_LEAVES. */
+ * poses is scratch for QRTI_SWEEP_POSES. */
 int qrt_sweep_free(const struct qrt_arm *arm, const double radius_m[3],
                    const struct qrt_points *pts, const struct qrt_lattice *lat,
                    const double a_deg[3], const double b_deg[3],
-                   struct qrt_sweep_leaf *leaves);
+                   struct qrti_sweep_pose *poses);
 
 #endif

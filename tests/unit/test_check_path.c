@@ -24,7 +24,7 @@ int main(void)
         struct qrt_target s = {QRT_TARGET_JOINTS, {0, 0, 0}};
         struct qrt_target g = {QRT_TARGET_JOINTS, {0, 0, 0}};
         double cloud[3 * 40], q[3], p[4][3], t;
-        int i, k, seg, blocked, now, straight;
+        int i, k, seg, blocked, now, straight, rc;
         for (i = 0; i < 40; i++) {
             double a = test_uniform(-3.14159, 3.14159);
             cloud[3 * i] = 0.6 * cos(a) + test_uniform(-0.05, 0.05);
@@ -40,9 +40,9 @@ int main(void)
         qrt_planner_add_points(&pl, cloud, 40);
         /* the straight motion before any mask: proved only where the whole
          * mask proves it too, and then the same plan */
-        straight = qrt_planner_plan_straight(&pl, &s, &g, &plan2);
-        CHECK(straight == 0 || straight == 1, "plan_straight returned %d",
-              straight);
+        rc = qrt_planner_plan_straight(&pl, &s, &g, &plan2, &straight);
+        CHECK(rc == QRT_OK && (straight == 0 || straight == 1),
+              "plan_straight returned %d, straight %d", rc, straight);
         qrt_planner_build_mask(&pl);
         if (qrt_planner_plan(&pl, &s, &g, &plan) == QRT_OK) {
             int full = plan.status == QRT_STATUS_OK && plan.n_waypoints == 2 &&

@@ -176,7 +176,7 @@ int main(void)
         struct qrt_params prm;
         struct qrt_target st, gt;
         struct qrt_plan plan;
-        struct qrt_goal_region region;
+        struct qrti_goal_region region;
         const struct qrt_lattice *lat;
         int goal[3], start[3], caged, c[3], d, tries;
         long n, i, si, gi, bad_bound = 0, bad_step = 0, bad_inf = 0,

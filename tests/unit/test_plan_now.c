@@ -177,10 +177,12 @@ static void random_plans(void)
                       full_plan.n_waypoints, &first) == QRT_OK &&
                       first == -1,
                   "trial %ld: the plan checks free", trial);
-            kept += pl.lazy_kept;
+            kept += qrt_planner_mask_state(&pl) == QRT_MASK_PARTIAL;
         } else if (rc_full == QRT_OK && trial % 4 == 3) {
-            kept += qrt_planner_plan_straight(&pl, &s, &g, &now_plan) >= 0 &&
-                    pl.lazy_kept;
+            int straight;
+            kept += qrt_planner_plan_straight(&pl, &s, &g, &now_plan,
+                                              &straight) == QRT_OK &&
+                    qrt_planner_mask_state(&pl) == QRT_MASK_PARTIAL;
         }
         rc_now = qrt_planner_plan_now(&pl, &s, &g, &now_plan);
         CHECK(rc_full == rc_now, "trial %ld: rc %d vs %d", trial, rc_full,
@@ -189,7 +191,7 @@ static void random_plans(void)
             int ia;
             for (ia = 0; ia < QRT_MAX_NA; ia++) {
                 indexed += pl.lazy_alpha_index[ia] >= 0;
-                unindexed += pl.lazy_alpha_index[ia] == QRT_LAZY_NO_INDEX;
+                unindexed += pl.lazy_alpha_index[ia] == QRTI_LAZY_NO_INDEX;
             }
         }
         if (rc_full != QRT_OK)
@@ -263,9 +265,11 @@ static void kept_rows_forgotten(void)
         qrt_planner_init(&pl, &prm);
         qrt_planner_add_points(&pl, cloud, n / 2);
         qrt_planner_check_path_now(&pl, (const double(*)[3])path, 2, &first);
-        CHECK(pl.lazy_kept, "trial %ld: kept", trial);
+        CHECK(qrt_planner_mask_state(&pl) == QRT_MASK_PARTIAL,
+              "trial %ld: kept", trial);
         qrt_planner_add_points(&pl, cloud + 3 * (n / 2), n - n / 2);
-        CHECK(!pl.lazy_kept, "trial %ld: forgotten", trial);
+        CHECK(qrt_planner_mask_state(&pl) == QRT_MASK_NONE,
+              "trial %ld: forgotten", trial);
         qrt_planner_plan_now(&pl, &s, &g, &now_plan);
         qrt_planner_build_mask(&pl);
         whole = pl.mask;
@@ -396,7 +400,7 @@ static void too_many_clusters(void)
                 sparse[3 * n + 2] = z;
                 n++;
             }
-    CHECK(n > QRT_LAZY_MAX_CLUSTERS, "%ld points", n);
+    CHECK(n > QRTI_LAZY_MAX_CLUSTERS, "%ld points", n);
     qrt_params_default(&prm);
     /* the straight motion is free here, and with shortcuts the points
      * themselves would prove it before any cluster is made */
@@ -420,7 +424,8 @@ static void too_many_clusters(void)
                   full_plan.n_waypoints, &first) == QRT_OK &&
                   first == -1 && whole_first == -1,
               "fallback: the plan checks free (%d, %d)", first, whole_first);
-        CHECK(!pl.lazy_kept, "fallback: nothing kept");
+        CHECK(qrt_planner_mask_state(&pl) != QRT_MASK_PARTIAL,
+              "fallback: nothing kept");
     }
     { /* a path out into the shell is blocked, both ways */
         static const double out[2][3] = {{-90, 90, -160}, {-90, 0, 0}};
@@ -442,7 +447,7 @@ int main(void)
     kept_rows_forgotten();
     fraction_built();
     finish_from_clusters();
-    if (QRT_LAZY_MAX_CLUSTERS < QRT_MAX_POINTS) /* this build can run out */
+    if (QRTI_LAZY_MAX_CLUSTERS < QRT_MAX_POINTS) /* this build can run out */
         too_many_clusters();
     return test_done("test_plan_now");
 }

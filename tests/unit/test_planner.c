@@ -284,9 +284,9 @@ static void test_abi_guard(void)
 
     abi.grid_deg_min = QRT_GRID_DEG_MIN == 10 ? 5 : 10;
     abi.max_points = QRT_MAX_POINTS == 1024 ? 2048 : 1024;
-    pl.mask_stale = 12345; /* init would set it to 1 */
+    pl.mask_state = QRT_MASK_WHOLE; /* init would set QRT_MASK_NONE */
     CHECK(qrt_planner_init_abi(&pl, &prm, &abi) == QRT_E_ABI &&
-              pl.mask_stale == 12345,
+              qrt_planner_mask_state(&pl) == QRT_MASK_WHOLE,
           "other settings refused, planner untouched");
     CHECK(qrt_abi_check(&abi, NULL, 0) == QRT_E_ABI, "verdict alone");
     CHECK(qrt_abi_check(&abi, why, sizeof why) == QRT_E_ABI, "settings");
@@ -336,7 +336,8 @@ static void test_abi_guard(void)
           "longest sizes sentence cut: '%s'", why);
 
     CHECK(strstr(qrt_err_name(QRT_E_ABI), "settings") != NULL, "err name");
-    CHECK(qrt_planner_init(&pl, &prm) == QRT_OK && pl.mask_stale == 1,
+    CHECK(qrt_planner_init(&pl, &prm) == QRT_OK &&
+              qrt_planner_mask_state(&pl) == QRT_MASK_NONE,
           "the caller's own build is the library's");
 }
 
