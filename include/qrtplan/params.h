@@ -17,7 +17,7 @@ struct qrt_params {
     int simplify;             /* 1: shortcut the lattice path */
 };
 
-/* design.md defaults: margin 0.01 m, C-space margin 0, 5 degrees, A*,
+/* The defaults of docs/spec.md: margin 0.01 m, C-space margin 0, 5 degrees, A*,
  * simplification on. */
 void qrt_params_default(struct qrt_params *params);
 
