@@ -3,7 +3,7 @@ BUILD ?= build
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 GEN := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 
-.PHONY: all setup test demo bench cross clean format help
+.PHONY: all setup check test demo bench cross clean format help
 
 all:
 	@cmake -S . -B $(BUILD) $(GEN) >/dev/null
@@ -11,6 +11,10 @@ all:
 
 setup:
 	@tools/setup.sh
+
+# the fast tier: the release build's tests but the VM ones
+check: setup
+	@tools/run_tests.sh --fast
 
 test: setup
 	@tools/run_tests.sh
@@ -41,7 +45,8 @@ clean:
 help:
 	@echo "make        build everything into build/ (programs in build/bin/)"
 	@echo "make demo   install what is missing, plan the paper's scenes, draw them (build/demo/)"
-	@echo "make test   install what is missing, run every test: unit, Python, ASan+UBSan, fuzz"
+	@echo "make check  install what is missing, build, run the release tests but the VM ones (minutes)"
+	@echo "make test   install what is missing, run every test: unit, Python, VM, sanitizers, cross, fuzz"
 	@echo "make bench  the paper's Table 5 and larger clouds, timed (build/bench/)"
 	@echo "make cross  the core for armhf, aarch64 (with tests) and Cortex-M7"
 	@echo "make format clang-format all C sources"

@@ -12,9 +12,20 @@
 #      qemu-system-arm, compared with the host's bit for bit,
 #   5. the memory table of docs/embedded.md checked against the built objects,
 #   6. the libFuzzer targets (scene/PCD readers, CAN frames, LCM messages).
+# With --fast (`make check`) only step 1 without its VM tests (names ending
+# in _vm): the C unit tests, the Python tests, the daemon over LCM.
 # Ends with one "N passed, M failed" line; exits non-zero on any failure.
 set -uo pipefail
 cd "$(dirname "$0")/.."
+fast=0
+case "${1:-}" in
+--fast) fast=1 ;;
+"") ;;
+*)
+    echo "usage: tools/run_tests.sh [--fast]" >&2
+    exit 2
+    ;;
+esac
 jobs=$(nproc 2>/dev/null || echo 2)
 gen=$(command -v ninja >/dev/null && echo "-G Ninja")
 fuzz_seconds=${QRT_FUZZ_SECONDS:-30}
@@ -46,6 +57,13 @@ run_suite() { # name builddir cmake-args...
     failed=$((failed + fails))
 }
 
+if [ $fast = 1 ]; then
+    ctest_args="-E _vm$" run_suite "release build, no VM tests" build \
+        -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQRT_PYTHON_TESTS=ON
+    echo "$passed passed, $failed failed"
+    [ "$failed" -eq 0 ]
+    exit
+fi
 run_suite "release build" build -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQRT_PYTHON_TESTS=ON
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
     run_suite "ASan + UBSan build" build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo \

@@ -14,70 +14,126 @@
 #include "qrtplan/qrtplan.h"
 #include "scene.h"
 
+/* Every command's synopsis: on stderr for a usage error, and atop the
+ * overview of `qrtplan --help`. Each command's own text (`qrtplan COMMAND
+ * --help`) follows. */
 static const char usage[] =
     "usage: qrtplan plan SCENE.json [-o PLAN.json] [--dijkstra] "
     "[--no-simplify]\n"
-    "                    [--as-read] [--max-memory BYTES]\n"
+    "                    [--whole-mask] [--max-memory BYTES]\n"
     "       qrtplan mask SCENE.json [-o MASK.json] [--max-memory BYTES]\n"
     "       qrtplan gen [--spheres N] [--points K] [--radius R] [--distance "
     "D]\n"
     "                   [--height Z] [--phase DEG] [--start A,S,E] [--goal "
     "A,S,E]\n"
     "                   [--pcd FILE | --pcd-ascii FILE] [-o SCENE.json]\n"
-    "       qrtplan --help | --version\n";
+    "       qrtplan COMMAND --help | --help | --version\n";
 
-static const char help[] =
+static const char overview[] =
     "\n"
-    "plan   Read a scene (arm, margins, grid_deg, points and/or a PCD\n"
-    "       points_file, start and goal as joints_deg or xyz_m), build the\n"
-    "       C-space mask and plan. Writes the plan as JSON to PLAN.json or\n"
-    "       stdout. Exit 0 for every well-formed scene, whatever the plan's\n"
-    "       status (ok, no_path, start_blocked, goal_blocked, unreachable,\n"
-    "       capacity); exit 2 with one line on stderr for input it cannot "
-    "use.\n"
-    "       Scene and plan files: docs/spec.md, sections Scene and Plan.\n"
-    "       --dijkstra      plain Dijkstra instead of A* (same cost, more "
-    "work)\n"
-    "       --no-simplify   return the lattice path without shortcuts\n"
-    "       --as-read       find only the mask nodes the plan reads, as it\n"
-    "                       reads them (qrt_planner_plan_now): the same plan,\n"
-    "                       sooner; stats then say cells_blocked -1 and put\n"
-    "                       the whole time under search\n"
-    "       --max-memory BYTES  the most memory it may hold (default 1G;\n"
-    "                       bytes, or with K, M or G, powers of 1024; at\n"
-    "                       least 16M): the planner's ~4 MB state and 8 MiB\n"
-    "                       for the program, then every buffer it allocates\n"
-    "                       to read the scene, counted before it is made:\n"
-    "                       the JSON text (at most 1 GiB), its tree without\n"
-    "                       the points array (~50 B a value), one point at\n"
-    "                       a time, and ~140 KiB to stream a PCD file into\n"
-    "                       the planner's fixed table, however many points\n"
-    "                       it holds or claims. A scene that needs more is\n"
-    "                       refused (exit 2). points_file must be a regular\n"
-    "                       file (a FIFO or a device is refused at once).\n"
-    "       stats.time_us is this run's wall clock; in a fresh process its\n"
-    "       total is mostly the first touch of the planner's ~4 MB state\n"
-    "       (compare builds with tools/bench.sh, not with it).\n"
-    "       SCENE.json '-' reads the scene from standard input (its\n"
-    "       points_file then relative to the working directory); '-o -'\n"
-    "       writes to standard output, in every command.\n"
-    "mask   Write the scene's blocked lattice nodes as JSON (index =\n"
-    "       (ia*ns + is)*ne + ie; node joints = lo_deg + i*grid_deg).\n"
-    "       --max-memory as for plan.\n"
-    "gen    Write a scene of the paper's obstacle family (its Eq. 13, Fig. "
-    "17):\n"
-    "       N spheres (default 1) of radius R (0.1 m), centres on a circle of\n"
-    "       radius D (0.6 m) around the base at height Z (0 m), the first at\n"
-    "       bearing DEG (180: behind the arm) and the rest every 360/N "
-    "degrees;\n"
-    "       K points per sphere (1444) as k*k samples of Eq. 13's two angles,\n"
-    "       k = round(sqrt(K)). Start (-100,0,0) and goal (100,0,0) unless\n"
-    "       given. With --pcd the points go to a binary PCD file that the "
-    "scene\n"
-    "       names in points_file (--pcd-ascii: ASCII PCD). Values it refuses\n"
-    "       (exit 2): N outside 1..1000, K outside 4..1e8, R outside\n"
-    "       1e-6..1000 m, D or Z beyond 1000 m, DEG beyond 1e6, more than\n"
-    "       1e8 points in all, and any number that is not finite.\n";
+    "plan   plan a scene file: the plan as JSON\n"
+    "mask   the scene's blocked lattice nodes as JSON\n"
+    "gen    write a scene of the paper's obstacle family (its Eq. 13)\n"
+    "\n"
+    "qrtplan COMMAND --help prints that command's options. SCENE.json '-'\n"
+    "reads the scene from standard input; '-o -' writes to standard output.\n"
+    "Scene and plan files: docs/cli.md and docs/spec.md.\n"
+    "\n"
+    "Exit status: 0 for every well-formed scene, whatever the plan's status;\n"
+    "2 with one line on stderr for input it cannot use, a bad option or\n"
+    "output it cannot write.\n";
+
+/* --max-memory, as plan and mask both take it */
+#define MAX_MEMORY_HELP                                                        \
+    "  --max-memory BYTES  the most memory it may hold (default 1G = 1 GiB;\n" \
+    "                    bytes, or with K, M or G, powers of 1024; at least\n" \
+    "                    16M): the planner's ~4 MB state and 8 MiB for the\n"  \
+    "                    program, then every buffer it allocates to read\n"    \
+    "                    the scene, counted before it is made: the JSON\n"     \
+    "                    text (at most 1 GiB), its tree without the points\n"  \
+    "                    array (~50 B a value), one point at a time, and\n"    \
+    "                    ~140 KiB to stream a PCD file into the planner's\n"   \
+    "                    fixed table, however many points it holds or\n"       \
+    "                    claims. A scene that needs more is refused (exit\n"   \
+    "                    2). points_file must be a regular file (a FIFO or\n"  \
+    "                    a device is refused at once).\n"
+
+static const char plan_help[] =
+    "usage: qrtplan plan SCENE.json [-o PLAN.json] [--dijkstra] "
+    "[--no-simplify]\n"
+    "                    [--whole-mask] [--max-memory BYTES]\n"
+    "\n"
+    "Read a scene (arm, margins, grid_deg, points and/or a PCD points_file,\n"
+    "start and goal as joints_deg or xyz_m) and plan, finding only the\n"
+    "C-space mask nodes the plan reads, as it reads them\n"
+    "(qrt_planner_plan_now): stats then say cells_blocked -1 and put the\n"
+    "whole time under search. Writes the plan as JSON to PLAN.json or\n"
+    "standard output. SCENE.json '-' reads standard input (its points_file\n"
+    "then relative to the working directory).\n"
+    "Scene and plan files: docs/spec.md, sections Scene and Plan.\n"
+    "\n"
+    "  -o PLAN.json      where to write the plan ('-': standard output)\n"
+    "  --dijkstra        plain Dijkstra instead of A* (same cost, more work)\n"
+    "  --no-simplify     return the lattice path without shortcuts\n"
+    "  --whole-mask      build the whole mask first, then plan on it\n"
+    "                    (qrt_planner_build_mask, qrt_planner_plan): the\n"
+    "                    same plan, later; stats give cells_blocked and the\n"
+    "                    mask's time under convert\n"
+    "  --as-read         the default, accepted for older "
+    "scripts\n" MAX_MEMORY_HELP "\n"
+    "stats.time_us is this run's wall clock; in a fresh process its total\n"
+    "is mostly the first touch of the planner's ~4 MB state (compare builds\n"
+    "with tools/bench.sh, not with it).\n"
+    "\n"
+    "Exit status: 0 for every well-formed scene, whatever the plan's status\n"
+    "(ok, no_path, start_blocked, goal_blocked, unreachable, capacity); 2\n"
+    "with one line on stderr for input it cannot use, a bad option or\n"
+    "output it cannot write.\n";
+
+static const char mask_help[] =
+    "usage: qrtplan mask SCENE.json [-o MASK.json] [--max-memory BYTES]\n"
+    "\n"
+    "Build the scene's whole C-space mask and write its blocked lattice\n"
+    "nodes as JSON: grid_deg, n, lo_deg, alpha_wraps, cells_blocked and\n"
+    "blocked, each an index (ia*ns + is)*ne + ie of the node whose joints\n"
+    "are lo_deg + i*grid_deg. SCENE.json '-' reads standard input.\n"
+    "\n"
+    "  -o MASK.json      where to write the mask ('-': standard "
+    "output)\n" MAX_MEMORY_HELP "\n"
+    "Exit status: 0 for every well-formed scene; 2 with one line on stderr\n"
+    "for input it cannot use, a bad option or output it cannot write.\n";
+
+static const char gen_help[] =
+    "usage: qrtplan gen [--spheres N] [--points K] [--radius R] [--distance "
+    "D]\n"
+    "                   [--height Z] [--phase DEG] [--start A,S,E] [--goal "
+    "A,S,E]\n"
+    "                   [--pcd FILE | --pcd-ascii FILE] [-o SCENE.json]\n"
+    "\n"
+    "Write a scene of the paper's obstacle family (its Eq. 13, Fig. 17).\n"
+    "\n"
+    "  --spheres N       spheres (default 1; 1..1000)\n"
+    "  --points K        points per sphere (default 1444; 4..1e8), as k*k\n"
+    "                    samples of Eq. 13's two angles, k = round(sqrt(K))\n"
+    "  --radius R        each sphere's radius in metres (default 0.1;\n"
+    "                    1e-6..1000)\n"
+    "  --distance D      radius in metres of the circle around the base that\n"
+    "                    carries the centres (default 0.6; |D| <= 1000)\n"
+    "  --height Z        the centres' height in metres (default 0; |Z| <=\n"
+    "                    1000)\n"
+    "  --phase DEG       the first centre's bearing (default 180: behind the\n"
+    "                    arm; |DEG| <= 1e6); the rest every 360/N degrees\n"
+    "  --start A,S,E     start joints in degrees (default -100,0,0)\n"
+    "  --goal A,S,E      goal joints in degrees (default 100,0,0)\n"
+    "  --pcd FILE        write the points to a binary PCD file that the\n"
+    "                    scene names in points_file\n"
+    "  --pcd-ascii FILE  the same as an ASCII PCD file\n"
+    "  -o SCENE.json     where to write the scene ('-': standard output)\n"
+    "\n"
+    "Exit status: 0 when the scene is written; 2 with one line on stderr\n"
+    "for a value it refuses (outside the ranges above, more than 1e8 points\n"
+    "in all, any number that is not finite), an unknown option or a file\n"
+    "it cannot write.\n";
 
 static int fail(const char *file, const char *msg)
 {
@@ -245,7 +301,7 @@ static int cmd_plan(int argc, char **argv)
     struct scene sc;
     struct qrt_plan plan;
     struct stage_times t;
-    int use_astar = 1, simplify = 1, as_read = 0, i, rc;
+    int use_astar = 1, simplify = 1, whole_mask = 0, i, rc;
     uint64_t max_memory = DEFAULT_MAX_MEMORY;
     long t_start = now_us(), t1;
     FILE *out;
@@ -259,8 +315,10 @@ static int cmd_plan(int argc, char **argv)
             use_astar = 0;
         else if (strcmp(argv[i], "--no-simplify") == 0)
             simplify = 0;
+        else if (strcmp(argv[i], "--whole-mask") == 0)
+            whole_mask = 1;
         else if (strcmp(argv[i], "--as-read") == 0)
-            as_read = 1;
+            whole_mask = 0;
         else if (is_scene_arg(argv[i]) && !scene_path)
             scene_path = argv[i];
         else
@@ -268,13 +326,15 @@ static int cmd_plan(int argc, char **argv)
     }
     if (!scene_path)
         return fail(NULL, "plan: no scene file given (see --help)");
-    rc = prepare(scene_path, &sc, use_astar, simplify, !as_read, max_memory,
+    rc = prepare(scene_path, &sc, use_astar, simplify, whole_mask, max_memory,
                  &t.convert_us);
     if (rc)
         return rc;
     t1 = now_us();
-    rc = as_read ? qrt_planner_plan_now(&planner, &sc.start, &sc.goal, &plan)
-                 : qrt_planner_plan(&planner, &sc.start, &sc.goal, &plan);
+    /* both give the same plan; asking only the nodes it reads is sooner */
+    rc = whole_mask
+             ? qrt_planner_plan(&planner, &sc.start, &sc.goal, &plan)
+             : qrt_planner_plan_now(&planner, &sc.start, &sc.goal, &plan);
     t.search_us = now_us() - t1;
     if (rc != QRT_OK)
         return fail(scene_name(scene_path), qrt_err_name(rc));
@@ -496,29 +556,48 @@ static int cmd_gen(int argc, char **argv)
     return close_output(out, out_path);
 }
 
+/* A command's own text when any of its arguments asks for help. */
+static int asks_help(int argc, char **argv)
+{
+    int i;
+    for (i = 2; i < argc; i++)
+        if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0)
+            return 1;
+    return 0;
+}
+
+static int print_help(const char *a, const char *b)
+{
+    fputs(a, stdout);
+    if (b)
+        fputs(b, stdout);
+    return close_output(stdout, NULL);
+}
+
 int main(int argc, char **argv)
 {
+    static const struct {
+        const char *name, *help;
+        int (*run)(int, char **);
+    } commands[] = {{"plan", plan_help, cmd_plan},
+                    {"mask", mask_help, cmd_mask},
+                    {"gen", gen_help, cmd_gen}};
+    size_t k;
     if (argc < 2) {
         fputs(usage, stderr);
         return 2;
     }
-    if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0 ||
-        (argc > 2 && (strcmp(argv[2], "--help") == 0))) {
-        fputs(usage, stdout);
-        fputs(help, stdout);
-        return close_output(stdout, NULL);
-    }
+    if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0)
+        return print_help(usage, overview);
     if (strcmp(argv[1], "--version") == 0) {
         printf("qrtplan %s (lattice >= %d deg, %d points exact)\n",
                QRTPLAN_VERSION, QRT_GRID_DEG_MIN, QRT_MAX_POINTS);
         return close_output(stdout, NULL);
     }
-    if (strcmp(argv[1], "plan") == 0)
-        return cmd_plan(argc - 2, argv + 2);
-    if (strcmp(argv[1], "mask") == 0)
-        return cmd_mask(argc - 2, argv + 2);
-    if (strcmp(argv[1], "gen") == 0)
-        return cmd_gen(argc - 2, argv + 2);
+    for (k = 0; k < sizeof commands / sizeof commands[0]; k++)
+        if (strcmp(argv[1], commands[k].name) == 0)
+            return asks_help(argc, argv) ? print_help(commands[k].help, NULL)
+                                         : commands[k].run(argc - 2, argv + 2);
     fputs(usage, stderr);
     return 2;
 }

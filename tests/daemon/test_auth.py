@@ -275,3 +275,44 @@ def test_the_sender_tool_sends_a_signed_request(daemon, tmp_path):
     assert tool.returncode == 0, out + d.text()
     assert "request 77: sent as 'op'" in out and "request 77: ok" in out
     assert plan_for(c, 77) is not None
+
+
+def test_the_example_client_prints_a_plan(daemon, tmp_path):
+    """examples/plan_client.py, the README's Python client, against a
+    daemon with keys: its signed request is planned among the Table 4
+    sphere, and what it prints is the plan the daemon published; signed
+    with a key the daemon does not hold, it gets no plan."""
+    d, c = daemon(keys=KEYS)
+    _, pts = scene_points("table4_one_sphere.json")
+    example = os.path.join(os.path.dirname(os.path.dirname(qrtauth.__file__)),
+                           "examples", "plan_client.py")
+
+    def run_example(key, wait):
+        tool = subprocess.Popen(
+            [os.sys.executable, example, "--key", key, "--lcm-url", d.url,
+             "--start", "-100", "0", "0", "--goal", "100", "0", "0",
+             "--wait", str(wait)],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        end = time.time() + wait + 20
+        while tool.poll() is None and time.time() < end:  # a sensor scans
+            c.publish("QRT_SCAN", scan_from_points(pts))
+            c.pump(0.1)
+        out, err = tool.communicate(timeout=5)
+        return tool.returncode, out, err
+
+    rc, out, err = run_example(os.path.join(str(tmp_path / "keys0"), "op.key"), 10)
+    assert rc == 0, out + err + d.text()
+    lines = out.splitlines()
+    assert lines[0].startswith("status ok: "), out
+    printed = [[float(v) for v in line.split()[1:]] for line in lines
+               if line.startswith("waypoint ")]
+    assert printed[0] == [-100, 0, 0] and printed[-1] == [100, 0, 0], out
+    # what it printed is a plan the daemon published among the sphere
+    assert any(p.status == "ok" and p.points == len(pts) and
+               len(p.waypoints_deg) == len(printed) and
+               all(abs(a - b) < 1e-6 for w, q in zip(p.waypoints_deg, printed)
+                   for a, b in zip(w, q)) for _, p in c.plans), (out, d.text())
+    # an operator key of the same name that the daemon does not hold
+    qrtauth.gen_keys(DAEMON, str(tmp_path / "other"), [("op", "operator")])
+    rc, out, err = run_example(str(tmp_path / "other" / "op.key"), 2)
+    assert rc == 1 and "no plan within" in err, out + err

@@ -159,14 +159,15 @@ def test_binary_compressed_pcd_by_hand(qrtplan, tmp_path):
     # literal 4 bytes, then copy 4 from 4 back; y and z likewise
     stream = b"".join(b"\x03" + soa[i:i + 4] + b"\x40\x03" for i in (0, 8, 16))
     write(tmp_path, lzf_pcd(2, len(stream), 24, stream), "cloud.pcd")
+    # on the whole mask, whose blocked cells the two must share
     code, plan, err = plan_scene(with_(points=None, points_file="cloud.pcd"),
-                                 tmp_path)
+                                 tmp_path, "--whole-mask")
     assert code == 0, err
     assert plan["stats"]["points"] == 2
     inline = [[0.6, 0.1, 0.0], [0.6, 0.1, 0.0]]
     code2, plan2, err2 = plan_scene(with_(points=[[float(np.float32(v)) for v in p]
                                                   for p in inline]), tmp_path,
-                                    name="inline")
+                                    "--whole-mask", name="inline")
     assert code2 == 0, err2
     assert plan["stats"]["cells_blocked"] == plan2["stats"]["cells_blocked"] > 0
 
@@ -248,11 +249,46 @@ def test_huge_cloud_is_quantised_or_refused_never_overflows(qrtplan, tmp_path):
 
 def test_help_and_usage(qrtplan):
     r = run_cli(["--help"])
-    assert r.returncode == 0 and "plan SCENE.json" in r.stdout
+    assert r.returncode == 0 and r.stderr == ""
+    # the overview: every command's usage and where each command's options are
+    for words in ("qrtplan plan SCENE.json", "qrtplan mask SCENE.json",
+                  "qrtplan gen [--spheres N]", "COMMAND --help",
+                  "Exit status"):
+        assert words in r.stdout, words
+    assert "--no-simplify  " not in r.stdout  # options are the commands' own
     r = run_cli(["frobnicate"])
     assert r.returncode == 2
     r = run_cli(["plan"])
     assert r.returncode == 2 and r.stderr.count("\n") == 1
+
+
+# each command's own text: its usage, its options, its exit status, and
+# not the other commands' usage or options
+COMMAND_HELP = {
+    "plan": ["usage: qrtplan plan SCENE.json", "-o PLAN.json", "--dijkstra",
+             "--no-simplify", "--whole-mask", "--as-read", "--max-memory",
+             "1 GiB", "Exit status"],
+    "mask": ["usage: qrtplan mask SCENE.json", "-o MASK.json", "--max-memory",
+             "1 GiB", "Exit status"],
+    "gen": ["usage: qrtplan gen", "--spheres N", "--points K", "--radius R",
+            "--distance D", "--height Z", "--phase DEG", "--start A,S,E",
+            "--goal A,S,E", "--pcd FILE", "--pcd-ascii FILE", "-o SCENE.json",
+            "Exit status"],
+}
+
+
+@pytest.mark.parametrize("command", sorted(COMMAND_HELP))
+@pytest.mark.parametrize("flag", ["--help", "-h"])
+def test_each_command_has_its_own_help(qrtplan, command, flag):
+    for args in ([command, flag], [command, "scene.json", flag]):
+        r = run_cli(args)
+        assert r.returncode == 0 and r.stderr == "", (args, r.stderr)
+        for words in COMMAND_HELP[command]:
+            assert words in r.stdout, (args, words)
+        assert r.stdout.count("usage: ") == 1, args
+        for other in set(COMMAND_HELP) - {command}:
+            assert f"qrtplan {other} " not in r.stdout, (args, other)
+        assert "--whole-mask" not in r.stdout or command == "plan"
 
 
 @pytest.mark.parametrize("program", ["qrtplan", "qrtplan-exec", "qrtpland",

@@ -307,6 +307,7 @@ def test_max_memory_refuses_bad_values(qrtplan, tmp_path, value, words):
     refused(measure(["plan", s, "--max-memory", value]), *words)
 
 
-def test_help_documents_the_budget(qrtplan):
-    r = measure(["--help"])
+@pytest.mark.parametrize("command", ["plan", "mask"])
+def test_help_documents_the_budget(qrtplan, command):
+    r = measure([command, "--help"])
     assert r.rc == 0 and "--max-memory" in r.out and "1 GiB" in r.out

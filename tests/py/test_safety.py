@@ -2,7 +2,8 @@
 the arm's radii, margins, grid, C-space margin and limits varied): every ok plan, sampled at 0.1
 degree per joint by the independent oracle, stays in the limits and collides
 with nothing (docs/spec.md §Guarantee). Every other scene is planned with
-`--as-read` (qrt_planner_plan_now), so the oracle checks both ways."""
+`--whole-mask` (qrt_planner_plan on a built mask), so the oracle checks both
+ways."""
 import collections
 import json
 import os
@@ -47,9 +48,9 @@ def run_one(args):
     with tempfile.TemporaryDirectory() as d:
         path = Path(d) / "scene.json"
         path.write_text(json.dumps(scene))
-        # every other scene with the mask nodes asked as the plan reads them
-        as_read = ["--as-read"] if seed % 2 else []
-        r = subprocess.run([str(BIN), "plan", str(path)] + as_read,
+        # every other scene on the whole mask built first
+        mode = ["--whole-mask"] if seed % 2 else []
+        r = subprocess.run([str(BIN), "plan", str(path)] + mode,
                            capture_output=True, text=True, timeout=120)
     if r.returncode != 0:
         return family, seed, "error", r.stderr.strip()
@@ -108,7 +109,7 @@ def test_a_free_goal_amid_blocked_cells_is_joined_from_further_out(qrtplan,
     assert oracle.clearances(arm, [scene["goal"]["joints_deg"]], pts)[0] > 0.01
     path = tmp_path / "shelf.json"
     path.write_text(json.dumps(scene))
-    for mode in ([], ["--as-read"]):
+    for mode in ([], ["--whole-mask"]):
         r = subprocess.run([str(BIN), "plan", str(path)] + mode,
                            capture_output=True, text=True, timeout=60)
         assert r.returncode == 0, r.stderr

@@ -1,6 +1,6 @@
 """The JSON Schemas of docs/schema/ (docs/spec.md §Scene and §Plan) against
 what qrtplan reads and writes: every shipped scene is valid, and so is every
-plan the command line makes for them, plain and --as-read, and for scenes
+plan the command line makes for them, by default and --whole-mask, and for scenes
 made from them to reach every status of the CLI. Scenes the schema refuses
 are refused by qrtplan too (exit 2), and plans with an unknown key, a wrong
 type or a missing key are refused by the plan schema, so neither schema can
@@ -17,7 +17,7 @@ from conftest import ROOT, run_cli
 
 SCHEMAS = ROOT / "docs" / "schema"
 SCENES = sorted((ROOT / "scenes").glob("*.json"))
-FLAGS = ([], ["--as-read"])
+FLAGS = ([], ["--whole-mask"])
 
 
 def validator(name):
@@ -63,6 +63,31 @@ def test_shipped_scene_and_its_plans_are_valid(qrtplan, scene_schema,
         plan = plan_file(path, *flags)
         assert plan["status"] == "ok", plan["detail"]
         assert_valid(plan_schema, plan)
+
+
+def without(plan, *keys):
+    """The plan without the given stats keys."""
+    plan = copy.deepcopy(plan)
+    for key in keys:
+        del plan["stats"][key]
+    return plan
+
+
+@pytest.mark.parametrize("path", SCENES, ids=lambda p: p.stem)
+def test_default_plan_is_the_whole_mask_plan(qrtplan, path):
+    """The default asks only the mask nodes the plan reads
+    (qrt_planner_plan_now) and gives the plan --whole-mask gives: the same
+    status, waypoints, cost and nodes expanded; only the blocked-cell count
+    (-1: no whole mask) and the times differ. --as-read is the default."""
+    default = plan_file(path)
+    whole = plan_file(path, "--whole-mask")
+    as_read = plan_file(path, "--as-read")
+    assert default["stats"]["cells_blocked"] == -1
+    assert default["stats"]["time_us"]["convert"] == 0
+    assert whole["stats"]["cells_blocked"] > 0
+    assert without(default, "time_us") == without(as_read, "time_us")
+    assert without(default, "time_us", "cells_blocked") == \
+        without(whole, "time_us", "cells_blocked")
 
 
 def walled_in():
