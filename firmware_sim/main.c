@@ -15,6 +15,7 @@
 #include "drive.h"
 #include "qrtcan/emcy.h"
 #include "qrtcan/frame.h"
+#include "qrtplan/joints.h"
 #include "socketcan.h"
 
 #define MAX_DRIVES 8
@@ -181,8 +182,7 @@ int main(int argc, char **argv)
     static struct drive drives[MAX_DRIVES];
     struct drive_config cfg[MAX_DRIVES];
     unsigned nodes[MAX_DRIVES] = {1, 2, 3}, n_nodes = 3, i;
-    /* the arm's joint limits (docs/spec.md section Arm), degrees */
-    static const double lim_deg[3][2] = {{-180, 180}, {-40, 180}, {-180, 140}};
+    static const double lim_deg[3][2] = QRT_ARM_DEFAULT_LIMIT_DEG;
     double start_deg[3] = {0, 0, 0};
     const char *iface = "vcan0";
     double counts_per_deg[3] = {1000, 1000, 1000}, offset_counts[3] = {0, 0, 0};
