@@ -400,11 +400,6 @@ static void mark_ranges(uint64_t *row, int ranges[3][2], int n)
         set_row_range(row, ranges[i][0], ranges[i][1]);
 }
 
-static int bit_set(const uint64_t *row, int i)
-{
-    return qrt_bit_test(row, i);
-}
-
 /* A disc (a member's plane) as seen from the elbow of one sigma row: its
  * centre w relative to the elbow and the reach link 3 must come within
  * (plus the float directions' error). */
@@ -653,7 +648,7 @@ static void raster_plane(const struct qrt_raster *r, int ia, double rho,
     nrows = link3_rows(r, &pl, rows);
     for (k = 0; k < nrows; k++)
         for (is = rows[k][0]; is <= rows[k][1]; is++) {
-            if (bit_set(full, is) || !wanted(r, ia, is))
+            if (qrt_bit_test(full, is) || !wanted(r, ia, is))
                 continue;
             mark_disc_row(r, is, &pl.dc, r->mask->rows[ia][is]);
         }
@@ -831,7 +826,7 @@ static inline int view_row(const struct qrt_raster *r,
     uint64_t *row = r->mask->rows[ia][is];
     int ranges[3][2], n, w;
     uint64_t any = 0;
-    if (!bit_set(v->rows, is))
+    if (!qrt_bit_test(v->rows, is))
         return 0;
     if (m == 1) { /* the point itself, as qrt_raster_point takes it */
         mark_disc_row(r, is, &v->disc, row);
