@@ -42,6 +42,15 @@ int args_long(const char *s, int base, long lo, long hi, long *out)
     return 0;
 }
 
+int args_int(const char *s, int base, int lo, int hi, int *out)
+{
+    long v;
+    if (args_long(s, base, lo, hi, &v) != 0)
+        return -1;
+    *out = (int)v;
+    return 0;
+}
+
 int args_numbers(const char *s, int n, double lo, double hi, double *out)
 {
     int k;

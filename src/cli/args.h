@@ -12,6 +12,9 @@ int args_number(const char *s, double lo, double hi, double *out);
 /* One integer in [lo, hi], in base (10; 0 also takes 0x hex and 0 octal). */
 int args_long(const char *s, int base, long lo, long hi, long *out);
 
+/* The same into an int. */
+int args_int(const char *s, int base, int lo, int hi, int *out);
+
 /* Exactly n comma-separated numbers, each in [lo, hi]. */
 int args_numbers(const char *s, int n, double lo, double hi, double *out);
 

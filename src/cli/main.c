@@ -318,16 +318,6 @@ static int cmd_mask(int argc, char **argv)
     return close_output(out, out_path);
 }
 
-/* gen's counts (args.h reads them), into the layout's ints */
-static int gen_count(const char *s, long lo, long hi, int *out)
-{
-    long v;
-    if (args_long(s, 10, lo, hi, &v) != 0)
-        return 0;
-    *out = (int)v;
-    return 1;
-}
-
 static int write_pcd(const char *path, const double *xyz, long n, int ascii)
 {
     FILE *f = fopen(path, ascii ? "w" : "wb");
@@ -396,9 +386,9 @@ static int cmd_gen(int argc, char **argv)
             return fail(NULL, "gen: option without a value (see --help)");
         i++;
         if (strcmp(a, "--spheres") == 0)
-            ok = gen_count(v, 1, 1000, &L.spheres), need = "1..1000";
+            ok = args_int(v, 10, 1, 1000, &L.spheres) == 0, need = "1..1000";
         else if (strcmp(a, "--points") == 0)
-            ok = gen_count(v, 4, 100000000, &L.points), need = "4..1e8";
+            ok = args_int(v, 10, 4, 100000000, &L.points) == 0, need = "4..1e8";
         else if (strcmp(a, "--radius") == 0)
             ok = args_number(v, 1e-6, 1e3, &L.radius_m) == 0,
             need = "1e-6..1000 m";
