@@ -247,7 +247,7 @@ int main(int argc, char **argv)
             (int32_t)(offset_counts[k] + lim_deg[k][0] * counts_per_deg[k]);
         cfg[i].limit_max =
             (int32_t)(offset_counts[k] + lim_deg[k][1] * counts_per_deg[k]);
-        if (k == 0) { /* alpha wraps (docs/spec.md section Arm): no end stops */
+        if (k == 0 && qrt_alpha_wraps(lim_deg[0])) { /* no end stops */
             cfg[i].limit_min = INT32_MIN;
             cfg[i].limit_max = INT32_MAX;
         }

@@ -21,6 +21,13 @@ extern "C" {
         }                                                                      \
     }
 
+/* Whether alpha, with limits lim_deg [lo, hi], wraps (and has no limit):
+ * exactly when they are the whole circle. */
+static inline int qrt_alpha_wraps(const double lim_deg[2])
+{
+    return lim_deg[0] == -180.0 && lim_deg[1] == 180.0;
+}
+
 /* deg reduced to (-180, 180]: a wrapping alpha's angles and steps, the
  * short way round. */
 static inline double qrt_wrap_deg(double deg)

@@ -388,12 +388,11 @@ int qrtcan_limits_valid(const double (*lim)[2])
     return 1;
 }
 
-/* Alpha wraps (and has no limit) iff its limits are the whole circle, as
- * in the planner (docs/spec.md section Arm). */
+/* Alpha wraps (and has no limit) as in the planner (docs/spec.md section
+ * Arm). */
 static int joint_wraps(const struct qrtcan_master_config *cfg, int j)
 {
-    return j == 0 && cfg->limit_deg[0][0] == -180.0 &&
-           cfg->limit_deg[0][1] == 180.0;
+    return j == 0 && qrt_alpha_wraps(cfg->limit_deg[0]);
 }
 
 /* Limits are a box, so a straight step between two waypoints inside stays

@@ -42,7 +42,7 @@ int qrt_arm_validate(const struct qrt_arm *arm)
 
 int qrt_arm_alpha_wraps(const struct qrt_arm *arm)
 {
-    return arm->limit_deg[0][0] == -180.0 && arm->limit_deg[0][1] == 180.0;
+    return qrt_alpha_wraps(arm->limit_deg[0]);
 }
 
 int qrt_arm_check_joints(const struct qrt_arm *arm, const double joints_deg[3])
