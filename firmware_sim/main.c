@@ -2,7 +2,6 @@
  * logic is drive.c (portable); this file is the board: options, the
  * SocketCAN driver, the 1 ms loop, and faults injected on schedule. */
 #define _POSIX_C_SOURCE 200809L
-#include <ctype.h>
 #include <errno.h>
 #include <math.h>
 #include <signal.h>
@@ -12,9 +11,11 @@
 #include <string.h>
 #include <time.h>
 
+#include "args.h"
 #include "drive.h"
 #include "qrtcan/emcy.h"
 #include "qrtcan/frame.h"
+#include "qrtplan/joints.h"
 #include "socketcan.h"
 
 #define MAX_DRIVES 8
@@ -29,16 +30,6 @@ static void on_signal(int sig)
 {
     (void)sig;
     stop_requested = 1;
-}
-
-/* --help and --version: text that never reached stdout is not success */
-static int finish_stdout(void)
-{
-    if (fflush(stdout) != 0 || ferror(stdout)) {
-        fprintf(stderr, "servo_sim: stdout: write failed\n");
-        return 2;
-    }
-    return 0;
 }
 
 static void usage(FILE *out)
@@ -105,19 +96,6 @@ static void usage(FILE *out)
         out);
 }
 
-static int parse_long(const char *s, long lo, long hi, long *out)
-{
-    char *end;
-    long v;
-    errno = 0;
-    v = strtol(s, &end, 0);
-    if (errno != 0 || end == s || *end != 0 || v < lo || v > hi) {
-        return -1;
-    }
-    *out = v;
-    return 0;
-}
-
 static int is_simulated(const unsigned *nodes, unsigned n_nodes, long id)
 {
     unsigned j;
@@ -126,48 +104,6 @@ static int is_simulated(const unsigned *nodes, unsigned n_nodes, long id)
             return 1;
         }
     }
-    return 0;
-}
-
-/* "X" for every joint or "X,Y,Z" one each, each in [lo, hi] */
-static int parse_per_joint(const char *s, double lo, double hi, double *out)
-{
-    int n = 0;
-    for (;;) {
-        char *end;
-        if (n == 3 || *s == 0 || isspace((unsigned char)*s)) {
-            return -1; /* strtod would skip a space */
-        }
-        out[n] = strtod(s, &end);
-        if (end == s || !(out[n] >= lo && out[n] <= hi)) {
-            return -1;
-        }
-        n++;
-        if (*end == 0) {
-            break;
-        }
-        if (*end != ',') {
-            return -1;
-        }
-        s = end + 1;
-    }
-    if (n == 2) {
-        return -1;
-    }
-    if (n == 1) {
-        out[1] = out[2] = out[0];
-    }
-    return 0;
-}
-
-static int parse_seconds(const char *s, double *out)
-{
-    char *end;
-    double v = strtod(s, &end);
-    if (end == s || *end != 0 || !(v >= 0 && v < 1e6)) {
-        return -1;
-    }
-    *out = v;
     return 0;
 }
 
@@ -181,8 +117,7 @@ int main(int argc, char **argv)
     static struct drive drives[MAX_DRIVES];
     struct drive_config cfg[MAX_DRIVES];
     unsigned nodes[MAX_DRIVES] = {1, 2, 3}, n_nodes = 3, i;
-    /* the arm's joint limits (docs/spec.md section Arm), degrees */
-    static const double lim_deg[3][2] = {{-180, 180}, {-40, 180}, {-180, 140}};
+    static const double lim_deg[3][2] = QRT_ARM_DEFAULT_LIMIT_DEG;
     double start_deg[3] = {0, 0, 0};
     const char *iface = "vcan0";
     double counts_per_deg[3] = {1000, 1000, 1000}, offset_counts[3] = {0, 0, 0};
@@ -203,11 +138,11 @@ int main(int argc, char **argv)
         int bad = 0;
         if (strcmp(o, "--help") == 0 || strcmp(o, "-h") == 0) {
             usage(stdout);
-            return finish_stdout();
+            return args_finish_stdout("servo_sim");
         }
         if (strcmp(o, "--version") == 0) {
             printf("servo_sim %s\n", QRT_VERSION);
-            return finish_stdout();
+            return args_finish_stdout("servo_sim");
         }
         if (strcmp(o, "--verbose") == 0) {
             verbose = 1;
@@ -223,18 +158,14 @@ int main(int argc, char **argv)
         } else if (strcmp(o, "--nodes") == 0) {
             bad = qrtcan_parse_node_list(v, nodes, MAX_DRIVES, &n_nodes) != 0;
         } else if (strcmp(o, "--counts-per-deg") == 0) {
-            bad = parse_per_joint(v, 1e-6, 999999.0, counts_per_deg);
+            bad = args_per_joint(v, 1e-6, 999999.0, counts_per_deg);
         } else if (strcmp(o, "--offset-counts") == 0) {
-            bad = parse_per_joint(v, -1e9, 1e9, offset_counts) ||
+            bad = args_per_joint(v, -1e9, 1e9, offset_counts) ||
                   offset_counts[0] != floor(offset_counts[0]) ||
                   offset_counts[1] != floor(offset_counts[1]) ||
                   offset_counts[2] != floor(offset_counts[2]);
         } else if (strcmp(o, "--start-deg") == 0) {
-            char extra;
-            bad = sscanf(v, "%lf,%lf,%lf%c", &start_deg[0], &start_deg[1],
-                         &start_deg[2], &extra) != 3 ||
-                  !(fabs(start_deg[0]) <= 1e5 && fabs(start_deg[1]) <= 1e5 &&
-                    fabs(start_deg[2]) <= 1e5);
+            bad = args_numbers(v, 3, -1e5, 1e5, start_deg);
         } else if (strcmp(o, "--limit") == 0) {
             /* 0x607D's limits are INTEGER32: a wider value would wrap */
             char extra;
@@ -246,23 +177,23 @@ int main(int argc, char **argv)
                   lim_min[n_lim] > lim_max[n_lim];
             n_lim += !bad;
         } else if (strcmp(o, "--servo-error") == 0) {
-            bad = parse_long(v, -1000000, 1000000, &servo_error);
+            bad = args_long(v, 0, -1000000, 1000000, &servo_error);
         } else if (strcmp(o, "--heartbeat-ms") == 0) {
-            bad = parse_long(v, 0, 65535, &heartbeat_ms);
+            bad = args_long(v, 0, 0, 65535, &heartbeat_ms);
         } else if (strcmp(o, "--watchdog-ms") == 0) {
-            bad = parse_long(v, 0, 3600000, &watchdog_ms);
+            bad = args_long(v, 0, 0, 3600000, &watchdog_ms);
         } else if (strcmp(o, "--fault-at") == 0) {
-            bad = parse_seconds(v, &fault_at);
+            bad = args_number(v, 0, 1e6, &fault_at);
         } else if (strcmp(o, "--fault-node") == 0) {
-            bad = parse_long(v, 1, 127, &fault_node);
+            bad = args_long(v, 0, 1, 127, &fault_node);
         } else if (strcmp(o, "--fault-code") == 0) {
-            bad = parse_long(v, 1, 0xFFFF, &fault_code);
+            bad = args_long(v, 0, 1, 0xFFFF, &fault_code);
         } else if (strcmp(o, "--mute-node") == 0) {
-            bad = parse_long(v, 1, 127, &mute_node);
+            bad = args_long(v, 0, 1, 127, &mute_node);
         } else if (strcmp(o, "--mute-at") == 0) {
-            bad = parse_seconds(v, &mute_at);
+            bad = args_number(v, 0, 1e6, &mute_at);
         } else if (strcmp(o, "--duration") == 0) {
-            bad = parse_seconds(v, &duration);
+            bad = args_number(v, 0, 1e6, &duration);
         } else {
             fprintf(stderr, "servo_sim: unknown option %s (see --help)\n", o);
             return 2;
@@ -316,7 +247,7 @@ int main(int argc, char **argv)
             (int32_t)(offset_counts[k] + lim_deg[k][0] * counts_per_deg[k]);
         cfg[i].limit_max =
             (int32_t)(offset_counts[k] + lim_deg[k][1] * counts_per_deg[k]);
-        if (k == 0) { /* alpha wraps (docs/spec.md section Arm): no end stops */
+        if (k == 0 && qrt_alpha_wraps(lim_deg[0])) { /* no end stops */
             cfg[i].limit_min = INT32_MIN;
             cfg[i].limit_max = INT32_MAX;
         }

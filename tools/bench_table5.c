@@ -20,6 +20,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "args.h"
 #include "gen.h"
 #include "qrtplan/qrtplan.h"
 
@@ -253,20 +254,25 @@ int main(int argc, char **argv)
     FILE *csv = NULL;
     struct cell c;
     for (i = 1; i < argc; i++) {
+        int bad = 0;
         if (strcmp(argv[i], "--repeats") == 0 && i + 1 < argc)
-            repeats = atoi(argv[++i]);
+            bad = args_int(argv[++i], 10, 0, 1000000, &repeats);
         else if (strcmp(argv[i], "--quick") == 0)
             repeats = 3;
         else if (strcmp(argv[i], "--csv") == 0 && i + 1 < argc)
             csv_path = argv[++i];
         else if (strcmp(argv[i], "--single") == 0 && i + 2 < argc) {
-            single_n = atoi(argv[++i]);
-            single_k = atoi(argv[++i]);
+            bad = args_int(argv[i + 1], 10, 1, 1000, &single_n) ||
+                  args_int(argv[i + 2], 10, 4, 100000000, &single_k);
+            i += 2;
         } else if (strcmp(argv[i], "--check-path") == 0) {
             check_only = 1;
         } else if (strcmp(argv[i], "--threads") == 0 && i + 1 < argc) {
-            mask_threads = atoi(argv[++i]);
+            bad = args_int(argv[++i], 10, 1, 2, &mask_threads);
         } else {
+            bad = 1;
+        }
+        if (bad) {
             fprintf(stderr, "usage: bench_table5 [--repeats R] [--quick] "
                             "[--csv FILE] [--single SPHERES POINTS] "
                             "[--threads 1|2] [--check-path]\n");

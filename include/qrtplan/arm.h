@@ -4,11 +4,21 @@
 #ifndef QRTPLAN_ARM_H
 #define QRTPLAN_ARM_H
 
+#include "qrtplan/joints.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
 
 enum { QRT_ALPHA = 0, QRT_SIGMA = 1, QRT_ETA = 2 };
+
+/* The default arm's links (docs/spec.md section Arm) as initializers, for
+ * qrt_arm_default; its limits are QRT_ARM_DEFAULT_LIMIT_DEG. */
+#define QRT_ARM_DEFAULT_LINK_M                                                 \
+    {                                                                          \
+        0.090, 0.332, 0.538                                                    \
+    }
+#define QRT_ARM_DEFAULT_LINK_RADIUS_M 0.02
 
 struct qrt_arm {
     double link_m[3];        /* L1, L2, L3 */
@@ -16,7 +26,8 @@ struct qrt_arm {
     double limit_deg[3][2];  /* [joint][lo, hi]; alpha wraps iff [-180, 180] */
 };
 
-/* Table 1 of the paper, radii 0.02 m, limits of docs/spec.md section Arm. */
+/* The default arm: the links above (Table 1 of the paper, radii 0.02 m) and
+ * QRT_ARM_DEFAULT_LIMIT_DEG. */
 void qrt_arm_default(struct qrt_arm *arm);
 
 /* QRT_OK, or QRT_E_INVALID for non-finite, negative or zero lengths,

@@ -55,6 +55,15 @@ bool parse_per_joint(const std::string &text, double out[3])
     return true;
 }
 
+int finish_stdout(const char *program)
+{
+    if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+        std::fprintf(stderr, "%s: stdout: write failed\n", program);
+        return 2;
+    }
+    return 0;
+}
+
 bool all_within(const double x[3], double lo, double hi)
 {
     return x[0] >= lo && x[0] <= hi && x[1] >= lo && x[1] <= hi && x[2] >= lo &&

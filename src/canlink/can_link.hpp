@@ -8,6 +8,11 @@
 // to the master as a bus error (the drives are then treated as lost, quick
 // stop is sent as soon as the bus takes frames again) and the socket is
 // reopened every half second until it works.
+//
+// Beside it, what qrtpland and qrtplan-exec both read from their options
+// (node ids, numbers, per-joint values, the drive settings, the limits) and
+// how both end --help: the one C++ home of each, as this library is the
+// part both programs link.
 #pragma once
 
 #include <array>
@@ -49,12 +54,18 @@ struct CanLinkStatus {
 bool parse_node_ids(const std::string &text, unsigned ids[3]);
 
 // "x,y,...": exactly n finite numbers, each field all number (no space,
-// nothing empty). False, with out partly written, for anything else.
+// nothing empty). False, with out partly written, for anything else. The
+// one number reader of qrtpland's and qrtplan-exec's options.
 bool parse_numbers(const std::string &text, double *out, int n);
 
 // "x" for all three joints (or links), or "x,y,z" one each: as the
 // per-joint options of qrtpland and qrtplan-exec take them.
 bool parse_per_joint(const std::string &text, double out[3]);
+
+// After --help or --version: 0, or 2 with "program: stdout: write failed"
+// on stderr when the text did not reach stdout (a script reading it must
+// not get silence and success).
+int finish_stdout(const char *program);
 
 // Whether each of x[0..2] is in [lo, hi] (false for NaN).
 bool all_within(const double x[3], double lo, double hi);

@@ -68,25 +68,6 @@ int fail_input(const std::string &msg)
     return 2;
 }
 
-// --help and --version: text that never reached stdout is not success
-int finish_stdout()
-{
-    if (std::fflush(stdout) != 0 || std::ferror(stdout))
-        return fail_input("stdout: write failed");
-    return 0;
-}
-
-bool parse_double(const char *s, double *out)
-{
-    char *end = nullptr;
-    errno = 0;
-    double v = std::strtod(s, &end);
-    if (errno || end == s || *end || !(v == v) || v > 1e12 || v < -1e12)
-        return false;
-    *out = v;
-    return true;
-}
-
 // The plan's waypoints, or an error message.
 std::string read_plan(const std::string &path,
                       std::vector<std::array<double, 3>> *wps)
@@ -158,10 +139,10 @@ int main(int argc, char **argv)
         std::string wanted;
         if (a == "--help" || a == "-h") {
             std::fputs(kUsage, stdout);
-            return finish_stdout();
+            return qrt::finish_stdout("qrtplan-exec");
         } else if (a == "--version") {
             std::printf("qrtplan-exec %s\n", QRTPLAN_VERSION);
-            return finish_stdout();
+            return qrt::finish_stdout("qrtplan-exec");
         } else if (a == "--can") {
             iface = value("--can");
         } else if (a == "--nodes") {
@@ -180,11 +161,13 @@ int main(int argc, char **argv)
                 return fail_input(std::string("--limits-deg wants ") +
                                   qrt::kLimitsDegWanted);
         } else if (a == "--heartbeat-timeout") {
-            if (!parse_double(value(a.c_str()), &v) || v < 20 || v > 60000)
+            if (!qrt::parse_numbers(value(a.c_str()), &v, 1) || v < 20 ||
+                v > 60000)
                 return fail_input("--heartbeat-timeout wants 20..60000 ms");
             cfg.heartbeat_timeout_us = uint32_t(v * 1000.0);
         } else if (a == "--timeout") {
-            if (!parse_double(value("--timeout"), &timeout_s) || timeout_s <= 0)
+            if (!qrt::parse_numbers(value("--timeout"), &timeout_s, 1) ||
+                timeout_s <= 0 || timeout_s > 1e12)
                 return fail_input("--timeout wants positive seconds");
         } else if (a == "--where") {
             where = true;

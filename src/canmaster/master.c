@@ -8,6 +8,7 @@
 #include "qrtcan/nmt.h"
 #include "qrtcan/sdo.h"
 #include "qrtcan/sync.h"
+#include "qrtplan/joints.h"
 
 /* Objects of the drives (CiA 301 / 402). */
 #define OD_HB_CONSUMER 0x1016u
@@ -66,8 +67,10 @@ static const struct sdo_step profile[] = {
 
 void qrtcan_master_config_default(struct qrtcan_master_config *cfg)
 {
+    static const double limits[QRTCAN_JOINTS][2] = QRT_ARM_DEFAULT_LIMIT_DEG;
     int j;
     memset(cfg, 0, sizeof *cfg);
+    memcpy(cfg->limit_deg, limits, sizeof limits);
     for (j = 0; j < QRTCAN_JOINTS; j++) {
         cfg->node[j] = (unsigned)j + 1u;
         cfg->scale[j].counts_per_deg = 1000.0;
@@ -75,12 +78,6 @@ void qrtcan_master_config_default(struct qrtcan_master_config *cfg)
         cfg->max_speed_deg_s[j] = 30.0;
         cfg->max_accel_deg_s2[j] = 60.0;
     }
-    cfg->limit_deg[0][0] = -180.0; /* docs/spec.md section Arm */
-    cfg->limit_deg[0][1] = 180.0;
-    cfg->limit_deg[1][0] = -40.0;
-    cfg->limit_deg[1][1] = 180.0;
-    cfg->limit_deg[2][0] = -180.0;
-    cfg->limit_deg[2][1] = 140.0;
     cfg->master_node = 127;
     cfg->sync_period_us = 10000;
     cfg->master_heartbeat_us = 100000;
@@ -91,16 +88,6 @@ void qrtcan_master_config_default(struct qrtcan_master_config *cfg)
     cfg->sdo_attempts = 3;
     cfg->enable_timeout_us = 2000000;
     cfg->retry_after_us = 1000000;
-}
-
-static double wrap180(double d)
-{
-    double r = fmod(d, 360.0);
-    if (r <= -180.0)
-        r += 360.0;
-    else if (r > 180.0)
-        r -= 360.0;
-    return r;
 }
 
 /* --- the outbox --------------------------------------------------------- */
@@ -401,12 +388,11 @@ int qrtcan_limits_valid(const double (*lim)[2])
     return 1;
 }
 
-/* Alpha wraps (and has no limit) iff its limits are the whole circle, as
- * in the planner (docs/spec.md section Arm). */
+/* Alpha wraps (and has no limit) as in the planner (docs/spec.md section
+ * Arm). */
 static int joint_wraps(const struct qrtcan_master_config *cfg, int j)
 {
-    return j == 0 && cfg->limit_deg[0][0] == -180.0 &&
-           cfg->limit_deg[0][1] == 180.0;
+    return j == 0 && qrt_alpha_wraps(cfg->limit_deg[0]);
 }
 
 /* Limits are a box, so a straight step between two waypoints inside stays
@@ -455,7 +441,7 @@ int qrtcan_master_set_path(struct qrtcan_master *m, const double (*wp)[3],
     for (j = 0; j < QRTCAN_JOINTS; j++) {
         double here = joint_deg(m, j), gap = wp[0][j] - here;
         if (j == 0)
-            gap = wrap180(gap);
+            gap = qrt_wrap_deg(gap);
         if (fabs(gap) > START_TOLERANCE_DEG)
             return QRTCAN_E_RANGE;
     }
@@ -525,7 +511,7 @@ static int segment_targets(struct qrtcan_master *m, double d[3],
     int j;
     for (j = 0; j < QRTCAN_JOINTS; j++) {
         double here = joint_deg(m, j);
-        d[j] = j == 0 ? wrap180(to[0] - wrap180(here)) : to[j] - here;
+        d[j] = j == 0 ? qrt_wrap_deg(to[0] - qrt_wrap_deg(here)) : to[j] - here;
         target[j] = here + d[j];
     }
     for (j = 0; j < QRTCAN_JOINTS; j++)
@@ -968,7 +954,7 @@ void qrtcan_master_get_status(const struct qrtcan_master *m,
             qrtcan_402_state_from_statusword(m->drive[j].statusword);
         st->all_positions_known &= m->drive[j].tpdo_seen;
     }
-    st->joints_deg[0] = wrap180(st->joints_deg[0]);
+    st->joints_deg[0] = qrt_wrap_deg(st->joints_deg[0]);
     st->waypoint = m->waypoint;
     st->n_waypoints = m->n_waypoints;
     st->path_done = m->path_done;

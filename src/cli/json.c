@@ -283,43 +283,21 @@ static int next_item(struct reader *r, char close, const char *what)
     return -1;
 }
 
-static int parse_array(struct reader *r, struct json *out, int depth)
+/* An array, its items kept; or, with skim, each item checked and freed as
+ * soon as it is read, the node getting the count and where the array
+ * starts (json_each_item reads it again; memory: one item's tree). One
+ * item loop for both, so a skimmed array is refused exactly where a kept
+ * one is. Inline: a scene's every point is an array, and a call for each
+ * would be most of what reading one costs. */
+static inline int read_array(struct reader *r, struct json *out, int depth,
+                             int skim)
 {
     size_t cap = 0;
     out->type = JSON_ARRAY;
-    r->pos++;
-    skip_space(r);
-    if (peek(r) == ']') {
-        r->pos++;
-        return 1;
+    if (skim) {
+        out->deferred = 1;
+        out->number = (double)r->pos; /* exact: offsets are far below 2^53 */
     }
-    for (;;) {
-        struct json v;
-        memset(&v, 0, sizeof v);
-        if (!parse_value(r, &v, depth + 1) ||
-            !push(r, &out->items, &out->count, &cap, &v)) {
-            free_children(&v);
-            return 0;
-        }
-        switch (next_item(r, ']', "array")) {
-        case 1:
-            continue;
-        case 0:
-            return 1;
-        default:
-            return 0;
-        }
-    }
-}
-
-/* An array checked item by item, each freed as soon as it is read: its
- * node gets the count and where the array starts (json_each_item reads it
- * again). Memory: one item's tree. */
-static int skim_array(struct reader *r, struct json *out, int depth)
-{
-    out->type = JSON_ARRAY;
-    out->deferred = 1;
-    out->number = (double)r->pos; /* exact: offsets are far below 2^53 */
     r->pos++;
     skip_space(r);
     if (peek(r) == ']') {
@@ -331,10 +309,14 @@ static int skim_array(struct reader *r, struct json *out, int depth)
         int ok;
         memset(&v, 0, sizeof v);
         ok = parse_value(r, &v, depth + 1);
-        free_children(&v);
+        if (ok && skim)
+            out->count++;
+        else if (ok)
+            ok = push(r, &out->items, &out->count, &cap, &v);
+        if (!ok || skim) /* else v's tree is the array's now */
+            free_children(&v);
         if (!ok)
             return 0;
-        out->count++;
         switch (next_item(r, ']', "array")) {
         case 1:
             continue;
@@ -397,7 +379,7 @@ static int parse_object(struct reader *r, struct json *out, int depth)
         skip_space(r);
         if (depth == 0 && r->defer && peek(r) == '[' &&
             strcmp(key, r->defer) == 0) {
-            if (!skim_array(r, &v, depth + 1)) {
+            if (!read_array(r, &v, depth + 1, 1)) {
                 budget_free(key);
                 free_children(&v);
                 return 0;
@@ -440,7 +422,7 @@ static int parse_value(struct reader *r, struct json *out, int depth)
     case '{':
         return parse_object(r, out, depth);
     case '[':
-        return parse_array(r, out, depth);
+        return read_array(r, out, depth, 0);
     case '"':
         out->type = JSON_STRING;
         out->string = parse_string(r);

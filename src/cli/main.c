@@ -8,6 +8,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "args.h"
 #include "budget.h"
 #include "gen.h"
 #include "plan_json.h"
@@ -377,46 +378,6 @@ static int cmd_mask(int argc, char **argv)
     return close_output(out, out_path);
 }
 
-/* gen's numbers: the whole text a number, finite and within [lo, hi], so
- * that no NaN, Inf or overflow reaches the scene it writes as JSON. */
-static int gen_number(const char *s, double lo, double hi, double *out)
-{
-    char *end = NULL;
-    double v;
-    errno = 0;
-    v = strtod(s, &end);
-    if (end == s || *end || errno || !(v >= lo && v <= hi))
-        return 0;
-    *out = v;
-    return 1;
-}
-
-static int gen_count(const char *s, long lo, long hi, int *out)
-{
-    char *end = NULL;
-    long v;
-    errno = 0;
-    v = strtol(s, &end, 10);
-    if (end == s || *end || errno || v < lo || v > hi)
-        return 0;
-    *out = (int)v;
-    return 1;
-}
-
-/* A,S,E in degrees; the planner checks the joint limits when it reads the
- * scene, so here only that the three are finite numbers. */
-static int parse_triple(const char *s, double v[3])
-{
-    char extra;
-    int k;
-    if (sscanf(s, "%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &extra) != 3)
-        return 0;
-    for (k = 0; k < 3; k++)
-        if (!(fabs(v[k]) <= 1e6))
-            return 0;
-    return 1;
-}
-
 static int write_pcd(const char *path, const double *xyz, long n, int ascii)
 {
     FILE *f = fopen(path, ascii ? "w" : "wb");
@@ -485,20 +446,23 @@ static int cmd_gen(int argc, char **argv)
             return fail(NULL, "gen: option without a value (see --help)");
         i++;
         if (strcmp(a, "--spheres") == 0)
-            ok = gen_count(v, 1, 1000, &L.spheres), need = "1..1000";
+            ok = args_int(v, 10, 1, 1000, &L.spheres) == 0, need = "1..1000";
         else if (strcmp(a, "--points") == 0)
-            ok = gen_count(v, 4, 100000000, &L.points), need = "4..1e8";
+            ok = args_int(v, 10, 4, 100000000, &L.points) == 0, need = "4..1e8";
         else if (strcmp(a, "--radius") == 0)
-            ok = gen_number(v, 1e-6, 1e3, &L.radius_m), need = "1e-6..1000 m";
+            ok = args_number(v, 1e-6, 1e3, &L.radius_m) == 0,
+            need = "1e-6..1000 m";
         else if (strcmp(a, "--distance") == 0)
-            ok = gen_number(v, -1e3, 1e3, &L.distance_m),
+            ok = args_number(v, -1e3, 1e3, &L.distance_m) == 0,
             need = "-1000..1000 m";
         else if (strcmp(a, "--height") == 0)
-            ok = gen_number(v, -1e3, 1e3, &L.height_m), need = "-1000..1000 m";
+            ok = args_number(v, -1e3, 1e3, &L.height_m) == 0,
+            need = "-1000..1000 m";
         else if (strcmp(a, "--phase") == 0)
-            ok = gen_number(v, -1e6, 1e6, &L.phase_deg), need = "-1e6..1e6 deg";
+            ok = args_number(v, -1e6, 1e6, &L.phase_deg) == 0,
+            need = "-1e6..1e6 deg";
         else if (strcmp(a, "--start") == 0 || strcmp(a, "--goal") == 0)
-            ok = parse_triple(v, a[2] == 's' ? start : goal),
+            ok = args_numbers(v, 3, -1e6, 1e6, a[2] == 's' ? start : goal) == 0,
             need = "three finite degrees A,S,E";
         else if (strcmp(a, "-o") == 0)
             out_path = output_path(v);

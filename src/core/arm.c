@@ -8,12 +8,12 @@
 
 void qrt_arm_default(struct qrt_arm *arm)
 {
-    static const double links[3] = {0.090, 0.332, 0.538};
-    static const double limits[3][2] = {{-180, 180}, {-40, 180}, {-180, 140}};
+    static const double links[3] = QRT_ARM_DEFAULT_LINK_M;
+    static const double limits[3][2] = QRT_ARM_DEFAULT_LIMIT_DEG;
     int i;
     for (i = 0; i < 3; i++) {
         arm->link_m[i] = links[i];
-        arm->link_radius_m[i] = 0.02;
+        arm->link_radius_m[i] = QRT_ARM_DEFAULT_LINK_RADIUS_M;
         arm->limit_deg[i][0] = limits[i][0];
         arm->limit_deg[i][1] = limits[i][1];
     }
@@ -42,7 +42,7 @@ int qrt_arm_validate(const struct qrt_arm *arm)
 
 int qrt_arm_alpha_wraps(const struct qrt_arm *arm)
 {
-    return arm->limit_deg[0][0] == -180.0 && arm->limit_deg[0][1] == 180.0;
+    return qrt_alpha_wraps(arm->limit_deg[0]);
 }
 
 int qrt_arm_check_joints(const struct qrt_arm *arm, const double joints_deg[3])

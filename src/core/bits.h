@@ -1,5 +1,6 @@
-/* Bit scans on 64-bit words, shared by the raster and the row builder.
- * Internal. */
+/* Bit sets in 64-bit words (bit i is bit i & 63 of word i >> 6) and bit
+ * scans on a word: the one place the core, and the tests that read its
+ * tables, spell them. Internal. */
 #ifndef QRT_CORE_BITS_H
 #define QRT_CORE_BITS_H
 
@@ -27,6 +28,28 @@ static inline int qrt_highest_bit(uint64_t x)
     x |= x >> 16;
     x |= x >> 32;
     return qrt_lowest_bit(x ^ (x >> 1));
+}
+
+/* The bit of i within its word. */
+static inline uint64_t qrt_bit_mask(long i)
+{
+    return 1ULL << (i & 63);
+}
+
+/* Is bit i of set set? 1 or 0. */
+static inline int qrt_bit_test(const uint64_t *set, long i)
+{
+    return (int)((set[i >> 6] >> (i & 63)) & 1U);
+}
+
+static inline void qrt_bit_set(uint64_t *set, long i)
+{
+    set[i >> 6] |= qrt_bit_mask(i);
+}
+
+static inline void qrt_bit_clear(uint64_t *set, long i)
+{
+    set[i >> 6] &= ~qrt_bit_mask(i);
 }
 
 #endif

@@ -4,19 +4,10 @@
 
 #include <math.h>
 
+#include "qrtplan/joints.h"
+
 #define QRT_PI 3.14159265358979323846
 #define QRT_DEG (QRT_PI / 180.0)
-
-/* x reduced to (-180, 180]. */
-static inline double qrt_wrap_deg(double x)
-{
-    double r = fmod(x, 360.0);
-    if (r <= -180.0)
-        r += 360.0;
-    else if (r > 180.0)
-        r -= 360.0;
-    return r;
-}
 
 /* x reduced to (-pi, pi]. */
 static inline double qrt_wrap_rad(double x)

@@ -166,7 +166,7 @@ int qrt_lazy_begin(struct qrt_planner *pl, struct qrt_raster *r)
 static void mark_ready(struct qrt_planner *pl, int ia, int is)
 {
     long bit = (long)ia * QRT_MAX_NS + is;
-    pl->rows_ready[bit >> 6] |= 1ULL << (bit & 63);
+    qrt_bit_set(pl->rows_ready, bit);
 }
 
 /* The kept clusters' views of alpha node ia, made now if they are not kept
@@ -184,7 +184,7 @@ static long alpha_views(struct qrt_planner *pl, int ia)
         n = pl->lazy_alpha_clusters[ia];
     else
         for (i = 0; i < pl->lazy_clusters; i++)
-            n += (c->t.geom[i].alpha[ia >> 6] >> (ia & 63)) & 1U;
+            n += qrt_bit_test(c->t.geom[i].alpha, ia);
     first = table_take(pl, n, size);
     if (first < 0) {
         forget_views(pl);
@@ -201,7 +201,7 @@ static long alpha_views(struct qrt_planner *pl, int ia)
         struct qrti_alpha_view *v = &c->t.view[first + k];
         i = pl->lazy_lists ? c->t.list[pl->lazy_alpha_list[ia] + e] : e;
         g = &c->t.geom[i];
-        if (((g->alpha[ia >> 6] >> (ia & 63)) & 1U) &&
+        if (qrt_bit_test(g->alpha, ia) &&
             qrt_raster_view_make(pl->lazy_raster, &ax, c->members + g->first,
                                  c->member_rho + g->first, g, ia, v)) {
             v->cluster = (int32_t)i;
@@ -261,7 +261,7 @@ void qrt_lazy_build(struct qrt_planner *pl, int ia, int is)
         struct qrti_alpha_view *v = &c->t.view[first + k];
         uint64_t ask[QRT_ROW_WORDS];
         int m;
-        if (!((v->rows[is >> 6] >> (is & 63)) & 1U))
+        if (!qrt_bit_test(v->rows, is))
             continue; /* (asked again inside; most views miss the row) */
         m = c->t.geom[v->cluster].m;
         if (qrt_raster_view_row(pl->lazy_raster, v, m, ia, is, ask))
@@ -302,8 +302,7 @@ static const uint64_t *row_views_of(struct qrt_planner *pl, long first, int ia,
                 long row = (w << 6) + qrt_lowest_bit(rows);
                 if (row < ns) /* always (the axis's ranges); the writes
                                 stay in the index whatever a view says */
-                    c->t.row_views[index + row * words + (k >> 6)] |=
-                        1ULL << (k & 63);
+                    qrt_bit_set(&c->t.row_views[index + row * words], k);
             }
         }
     *at = (int32_t)index;
@@ -338,25 +337,21 @@ int qrt_lazy_node_from_views(struct qrt_planner *pl, long first, int ia, int is,
 int qrt_lazy_node_blocked(struct qrt_planner *pl, const int ijk[3])
 {
     uint64_t *row = pl->mask.rows[ijk[0]][ijk[1]];
-    uint64_t bit = 1ULL << (ijk[2] & 63);
     long first;
     if (qrt_lazy_known(pl, ijk))
-        return (int)((row[ijk[2] >> 6] >> (ijk[2] & 63)) & 1U);
+        return qrt_bit_test(row, ijk[2]);
     first = pl->lazy_raster->sector_ok ? alpha_views(pl, ijk[0]) : -1;
     if (first < 0) { /* the row, as qrt_lazy_build makes it */
         qrt_lazy_build(pl, ijk[0], ijk[1]);
-        return (int)((row[ijk[2] >> 6] >> (ijk[2] & 63)) & 1U);
+        return qrt_bit_test(row, ijk[2]);
     }
     /* link 1 and link 2 block whole rows, rastered before this */
-    if (!(row[ijk[2] >> 6] & bit) &&
+    if (!qrt_bit_test(row, ijk[2]) &&
         qrt_lazy_node_from_views(pl, first, ijk[0], ijk[1], ijk[2]))
-        row[ijk[2] >> 6] |= bit;
-    {
-        long k = qrt_lazy_known_bit(pl, ijk);
-        pl->open.lazy.clusters.known[k >> 6] |= 1ULL << (k & 63);
-    }
+        qrt_bit_set(row, ijk[2]);
+    qrt_bit_set(pl->open.lazy.clusters.known, qrt_lazy_known_bit(pl, ijk));
     pl->lazy_nodes_asked++;
-    return (row[ijk[2] >> 6] & bit) != 0;
+    return qrt_bit_test(row, ijk[2]);
 }
 
 void qrt_lazy_build_rows(struct qrt_planner *pl, const uint64_t *rows)
@@ -365,7 +360,7 @@ void qrt_lazy_build_rows(struct qrt_planner *pl, const uint64_t *rows)
     for (ia = 0; ia < pl->mask.lat.n[0]; ia++)
         for (is = 0; is < pl->mask.lat.n[1]; is++) {
             long bit = (long)ia * QRT_MAX_NS + is;
-            if ((!rows || ((rows[bit >> 6] >> (bit & 63)) & 1U)) &&
+            if ((!rows || qrt_bit_test(rows, bit)) &&
                 !qrt_lazy_ready(pl, ia, is))
                 qrt_lazy_build(pl, ia, is);
         }

@@ -13,6 +13,7 @@
 #ifndef QRT_CORE_LAZY_H
 #define QRT_CORE_LAZY_H
 
+#include "bits.h"
 #include "qrtplan/planner.h"
 
 /* Cluster the points into pl->open.lazy and keep them there, with r (set
@@ -36,8 +37,7 @@ static inline int qrt_lazy_building(const struct qrt_planner *pl)
 static inline int qrt_lazy_ready(const struct qrt_planner *pl, int ia, int is)
 {
     long bit = (long)ia * QRT_MAX_NS + is;
-    return !qrt_lazy_building(pl) ||
-           ((pl->rows_ready[bit >> 6] >> (bit & 63)) & 1U);
+    return !qrt_lazy_building(pl) || qrt_bit_test(pl->rows_ready, bit);
 }
 
 /* Row (ia, is) built, if rows are being built as they are read. */
@@ -74,7 +74,7 @@ static inline int qrt_lazy_known(const struct qrt_planner *pl, const int ijk[3])
     if (qrt_lazy_ready(pl, ijk[0], ijk[1]))
         return 1;
     bit = qrt_lazy_known_bit(pl, ijk);
-    return (int)((pl->open.lazy.clusters.known[bit >> 6] >> (bit & 63)) & 1U);
+    return qrt_bit_test(pl->open.lazy.clusters.known, bit);
 }
 
 /* Build the rows in rows (bit ia * QRT_MAX_NS + is; NULL: every row) that

@@ -3,12 +3,12 @@
 #ifndef QRT_CORE_MASK_BIT_H
 #define QRT_CORE_MASK_BIT_H
 
+#include "bits.h"
 #include "qrtplan/lattice.h"
 
 static inline int qrt_mask_bit(const struct qrt_mask *mask, const int ijk[3])
 {
-    return (int)((mask->rows[ijk[0]][ijk[1]][ijk[2] >> 6] >> (ijk[2] & 63)) &
-                 1U);
+    return qrt_bit_test(mask->rows[ijk[0]][ijk[1]], ijk[2]);
 }
 
 #endif

@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stddef.h>
 
+#include "bits.h"
 #include "geom.h"
 
 void qrt_motion_delta(const struct qrt_lattice *lat, const double a_deg[3],
@@ -89,7 +90,7 @@ static int walk(const struct qrt_mask *mask, qrt_node_blocked blocked,
         if (rows) {
             if (inside) {
                 long bit = (long)ijk[0] * QRT_MAX_NS + ijk[1];
-                rows[bit >> 6] |= 1ULL << (bit & 63);
+                qrt_bit_set(rows, bit);
             }
         } else {
             if (t_hit) /* where the motion is in the cell it fails in */

@@ -143,7 +143,7 @@ static inline int wanted(const struct qrt_raster *r, int ia, int is)
     long bit = (long)ia * QRT_MAX_NS + is;
     if (r->only_alpha >= 0)
         return ia == r->only_alpha && is >= r->only_s0 && is < r->only_s1;
-    return !r->only_rows || ((r->only_rows[bit >> 6] >> (bit & 63)) & 1U);
+    return !r->only_rows || qrt_bit_test(r->only_rows, bit);
 }
 
 static void block_alpha(const struct qrt_raster *r, int ia)
@@ -343,7 +343,7 @@ static void raster_link2(const struct qrt_raster *r, int ia,
     for (i = 0; i < n; i++)
         for (is = ranges[i][0]; is <= ranges[i][1]; is++) {
             set_row_range(r->mask->rows[ia][is], 0, lat->n[2] - 1);
-            full[is >> 6] |= 1ULL << (is & 63);
+            qrt_bit_set(full, is);
         }
 }
 
@@ -398,11 +398,6 @@ static void mark_ranges(uint64_t *row, int ranges[3][2], int n)
     int i;
     for (i = 0; i < n; i++)
         set_row_range(row, ranges[i][0], ranges[i][1]);
-}
-
-static int bit_set(const uint64_t *row, int i)
-{
-    return (int)((row[i >> 6] >> (i & 63)) & 1U);
 }
 
 /* A disc (a member's plane) as seen from the elbow of one sigma row: its
@@ -563,7 +558,7 @@ static int disc_row_nodes(const struct qrt_raster *r, int is,
         for (; bits; bits &= bits - 1U) {
             int ie = (w << 6) + qrt_lowest_bit(bits);
             if (!node_meets(r, is, ie, seen, &v))
-                out[w] &= ~(1ULL << (ie & 63));
+                qrt_bit_clear(out, ie);
         }
         any |= out[w];
     }
@@ -631,7 +626,7 @@ static void mark_member_nodes(const struct qrt_raster *r, int is,
             for (; bits; bits &= bits - 1U) {
                 int ie = (w << 6) + qrt_lowest_bit(bits);
                 if (node_meets(r, is, ie, seen, &v))
-                    row[w] |= 1ULL << (ie & 63);
+                    qrt_bit_set(row, ie);
             }
             left |= ask[w] & ~row[w];
         }
@@ -653,7 +648,7 @@ static void raster_plane(const struct qrt_raster *r, int ia, double rho,
     nrows = link3_rows(r, &pl, rows);
     for (k = 0; k < nrows; k++)
         for (is = rows[k][0]; is <= rows[k][1]; is++) {
-            if (bit_set(full, is) || !wanted(r, ia, is))
+            if (qrt_bit_test(full, is) || !wanted(r, ia, is))
                 continue;
             mark_disc_row(r, is, &pl.dc, r->mask->rows[ia][is]);
         }
@@ -831,7 +826,7 @@ static inline int view_row(const struct qrt_raster *r,
     uint64_t *row = r->mask->rows[ia][is];
     int ranges[3][2], n, w;
     uint64_t any = 0;
-    if (!bit_set(v->rows, is))
+    if (!qrt_bit_test(v->rows, is))
         return 0;
     if (m == 1) { /* the point itself, as qrt_raster_point takes it */
         mark_disc_row(r, is, &v->disc, row);
@@ -923,7 +918,7 @@ long qrt_raster_next_ball(const struct qrt_raster *r,
                           const uint64_t *row_views, long k, long n, int is,
                           int ie)
 {
-    const uint64_t row_bit = 1ULL << (is & 63);
+    const uint64_t row_bit = qrt_bit_mask(is);
     const int word = is >> 6;
     struct node_sector ns;
     long w;
@@ -979,7 +974,7 @@ void qrt_raster_cluster_at(const struct qrt_raster *r,
     struct qrti_disc md[QRT_CLUSTER_MAX];
     uint64_t ask[QRT_ROW_WORDS];
     int discs_ready = 0, w;
-    if (!owns(r, ia) || !((g->alpha[ia >> 6] >> (ia & 63)) & 1U))
+    if (!owns(r, ia) || !qrt_bit_test(g->alpha, ia))
         return;
     if (!qrt_raster_view_make(r, ax, members, mrho, g, ia, &v))
         return;
@@ -1018,7 +1013,7 @@ void qrt_raster_cluster(const struct qrt_raster *r,
         return;
     qrt_raster_cluster_prepare(r, ax, members, m, &g, mrho);
     for (ia = 0; ia < r->mask->lat.n[0]; ia++)
-        if ((g.alpha[ia >> 6] >> (ia & 63)) & 1U)
+        if (qrt_bit_test(g.alpha, ia))
             qrt_raster_cluster_at(r, ax, members, mrho, &g, ia);
 }
 

@@ -25,7 +25,7 @@ void qrt_search_direction(int dir, int offset[3])
  * (pushed): the seen bits are cleared per search instead of heap_pos. */
 static inline int seen_node(const struct qrt_planner *pl, long node)
 {
-    return (int)((pl->search_seen[node >> 6] >> (node & 63)) & 1U);
+    return qrt_bit_test(pl->search_seen, node);
 }
 
 /* The node's place on the heap, or -1 (never pushed) or -2 (closed). */
@@ -146,7 +146,7 @@ static void push_or_lower(struct qrt_planner *pl, long *size, long node,
         pl->open.heap[pl->heap_pos[node]] = e;
         sift_up(pl, pl->heap_pos[node]);
     } else {
-        pl->search_seen[node >> 6] |= 1ULL << (node & 63);
+        qrt_bit_set(pl->search_seen, node);
         /* the lazily built mask keeps its clusters in the heap's tail:
          * finish the mask before the heap grows into them */
         if (qrt_lazy_building(pl) && *size >= QRTI_LAZY_HEAP)
@@ -233,7 +233,7 @@ static double region_estimate(const struct qrti_goal_region *g,
     h = lane[0] < lane[1] ? lane[0] : lane[1];
     h = lane[2] < h ? lane[2] : h;
     h = lane[3] < h ? lane[3] : h;
-    if ((g->alpha[ijk[0] >> 6] >> (ijk[0] & 63)) & 1U) {
+    if (qrt_bit_test(g->alpha, ijk[0])) {
         for (i = 0; i < g->settled; i++) {
             if (g->node[i] == (int32_t)node) {
                 float exact = g->cost[i] / (float)lat->grid_deg;
@@ -425,7 +425,7 @@ static void search_from(struct qrt_planner *pl, const struct moves *mv,
     for (i = 0; goals && i < goals->count; i++) {
         int c[3];
         qrt_lattice_coords(lat, goals->node[i], c);
-        goal_alpha[c[0] >> 6] |= 1ULL << (c[0] & 63);
+        qrt_bit_set(goal_alpha, c[0]);
     }
     for (i = 0; i < seeds->count; i++) {
         long node = seeds->node[i];
@@ -465,11 +465,11 @@ static void search_from(struct qrt_planner *pl, const struct moves *mv,
         res->expanded++;
         if (region) {
             region->node[region->settled] = (int32_t)u;
-            region->alpha[ijk[0] >> 6] |= 1ULL << (ijk[0] & 63);
+            qrt_bit_set(region->alpha, ijk[0]);
             region->cost[region->settled] = pl->search.dist[u];
             if (++region->settled == QRT_GOAL_REGION_NODES)
                 break;
-        } else if (((goal_alpha[ijk[0] >> 6] >> (ijk[0] & 63)) & 1U) &&
+        } else if (qrt_bit_test(goal_alpha, ijk[0]) &&
                    (slot = goal_slot(goals, u)) >= 0 &&
                    (double)pl->search.dist[u] + goals->cost[slot] < best) {
             best = (double)pl->search.dist[u] + goals->cost[slot];

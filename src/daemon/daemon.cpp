@@ -14,6 +14,7 @@
 #include "log.hpp"
 #include "qrtplan/daemon_status_t.hpp"
 #include "qrtplan/joint_state_t.hpp"
+#include "qrtplan/joints.h"
 #include "qrtplan/plan_t.hpp"
 
 namespace qrt
@@ -22,20 +23,10 @@ namespace qrt
 namespace
 {
 
-double wrap180(double d)
-{
-    double r = std::fmod(d, 360.0);
-    if (r <= -180.0)
-        r += 360.0;
-    else if (r > 180.0)
-        r -= 360.0;
-    return r;
-}
-
 // Largest joint difference, alpha the short way.
 double joint_gap(const double a[3], const double b[3])
 {
-    double g = std::fabs(wrap180(a[0] - b[0]));
+    double g = std::fabs(qrt_wrap_deg(a[0] - b[0]));
     for (int j = 1; j < 3; j++)
         g = std::max(g, std::fabs(a[j] - b[j]));
     return g;

@@ -3,6 +3,7 @@
 #include <csignal>
 #include <cstdio>
 
+#include "can_link.hpp"
 #include "daemon.hpp"
 #include "keyfile.hpp"
 #include "log.hpp"
@@ -27,15 +28,8 @@ int main(int argc, char **argv)
     qrt::Options opts;
     std::string error;
     int rc = qrt::parse_options(argc, argv, &opts, &error);
-    if (rc == 1) {
-        // --help or --version: a script that reads them must not get
-        // silence and success when stdout cannot take the text
-        if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
-            std::fprintf(stderr, "qrtpland: stdout: write failed\n");
-            return 2;
-        }
-        return 0;
-    }
+    if (rc == 1) // --help or --version
+        return qrt::finish_stdout("qrtpland");
     if (rc != 0) {
         std::fprintf(stderr, "qrtpland: %s\n", error.c_str());
         return 2;

@@ -114,17 +114,6 @@ const char *kUsage =
 namespace
 {
 
-bool to_double(const std::string &s, double *out)
-{
-    char *end = nullptr;
-    errno = 0;
-    double v = std::strtod(s.c_str(), &end);
-    if (s.empty() || errno || *end || !std::isfinite(v))
-        return false;
-    *out = v;
-    return true;
-}
-
 // "a,b,c": sensor ids as scans carry them (1..64 characters, no control
 // characters; a comma separates). Appended to *ids, each once.
 bool add_sensor_ids(const std::string &text, std::vector<std::string> *ids)
@@ -173,7 +162,7 @@ bool apply(Options *o, const std::string &key, const std::string &value,
         return false;
     };
     auto number = [&](double lo, double hi) {
-        return to_double(value, &v) && v >= lo && v <= hi;
+        return parse_numbers(value, &v, 1) && v >= lo && v <= hi;
     };
     std::string *channel = key == "scan-channel"      ? &o->scan_channel
                            : key == "request-channel" ? &o->request_channel

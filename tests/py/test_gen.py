@@ -42,6 +42,10 @@ def test_pcd_beside_the_scene_is_named_relatively(qrtplan, tmp_path):
     ("--phase", "inf"), ("--start", "nan,0,0"), ("--goal", "1,2,inf"),
     ("--goal", "1,2"), ("--spheres", "4294967297"), ("--spheres", "2x"),
     ("--points", "3"),
+    # read as every other number on the command line (src/cli/args.h): no
+    # space that strtod would skip, nothing after the last number
+    ("--start", "0, 0,0"), ("--goal", "1,2,3,"), ("--radius", " 1"),
+    ("--spheres", " 2"),
 ])
 def test_values_that_would_write_garbage_are_refused(qrtplan, tmp_path,
                                                      option, value):

@@ -11,6 +11,7 @@
  * sit in pockets, where the region is taken, and in closed components. */
 #include <string.h>
 
+#include "../../src/core/bits.h"
 #include "../../src/core/search.h"
 #include "check.h"
 #include "qrtplan/qrtplan.h"
@@ -102,12 +103,12 @@ static void set_blocked(struct qrt_mask *m, int a, int s, int e)
     if (v < 0)
         return;
     qrt_lattice_coords(&m->lat, v, c);
-    m->rows[c[0]][c[1]][c[2] >> 6] |= 1ULL << (c[2] & 63);
+    qrt_bit_set(m->rows[c[0]][c[1]], c[2]);
 }
 
 static void clear_node(struct qrt_mask *m, const int c[3])
 {
-    m->rows[c[0]][c[1]][c[2] >> 6] &= ~(1ULL << (c[2] & 63));
+    qrt_bit_clear(m->rows[c[0]][c[1]], c[2]);
 }
 
 static int pick(int n)

@@ -12,6 +12,7 @@
  * whole mask. */
 #include <string.h>
 
+#include "../../src/core/bits.h"
 #include "../../src/core/lazy.h"
 #include "../../src/core/raster.h"
 #include "check.h"
@@ -93,7 +94,7 @@ static int same_plan(const struct qrt_plan *a, const struct qrt_plan *b)
 static int row_ready(int ia, int is)
 {
     long bit = (long)ia * QRT_MAX_NS + is;
-    return (int)((pl.rows_ready[bit >> 6] >> (bit & 63)) & 1U);
+    return qrt_bit_test(pl.rows_ready, bit);
 }
 
 static int known_bit(int ia, int is, int ie)
@@ -106,7 +107,7 @@ static int known_bit(int ia, int is, int ie)
     /* the kept set itself: after the plan, rows are no longer built as
      * read, so qrt_lazy_known says every node */
     bit = qrt_lazy_known_bit(&pl, ijk);
-    return (int)((pl.open.lazy.clusters.known[bit >> 6] >> (bit & 63)) & 1U);
+    return qrt_bit_test(pl.open.lazy.clusters.known, bit);
 }
 
 /* Nodes known (in rows built, or asked alone) whose bit differs from the
