@@ -13,13 +13,10 @@ extern "C" {
 
 /* [joint][lo, hi] in degrees, alpha's the whole circle (so it wraps), as an
  * initializer: the one definition of the default limits. */
-#define QRT_ARM_DEFAULT_LIMIT_DEG                                              \
-    {                                                                          \
-        {-180.0, 180.0}, {-40.0, 180.0},                                       \
-        {                                                                      \
-            -180.0, 140.0                                                      \
-        }                                                                      \
-    }
+/* clang-format off */
+#define QRT_ARM_DEFAULT_LIMIT_DEG \
+    {{-180.0, 180.0}, {-40.0, 180.0}, {-180.0, 140.0}}
+/* clang-format on */
 
 /* Whether alpha, with limits lim_deg [lo, hi], wraps (and has no limit):
  * exactly when they are the whole circle. */

@@ -2,6 +2,7 @@
  * paper's collision-angle equations (Eqs. 1-11) against brute force and
  * against the mask. */
 #include "check.h"
+#include "qrtplan/joints.h"
 #include "qrtplan/qrtplan.h"
 #include "ref_arm.h"
 
@@ -136,6 +137,36 @@ static void test_paper_equations(void)
           checked);
 }
 
+/* alpha wraps exactly when its limits are the whole circle, and a wrapping
+ * alpha's angles reduce to (-180, 180]: both from qrtplan/joints.h, which
+ * the CAN master and the simulated drives share with the core. */
+static void test_alpha_wrap(void)
+{
+    static const double limits[][2] = {{-180.0, 180.0},
+                                       {-180.0, 175.0},
+                                       {-175.0, 180.0},
+                                       {-180.0, 179.999},
+                                       {-90.0, 90.0}};
+    static const double wrap[][2] = {
+        {180.0, 180.0},  {-180.0, 180.0}, {190.0, -170.0}, {540.0, 180.0},
+        {-540.0, 180.0}, {359.5, -0.5},   {-0.25, -0.25},  {-179.5, -179.5}};
+    struct qrt_arm arm;
+    size_t i;
+    qrt_arm_default(&arm);
+    for (i = 0; i < sizeof limits / sizeof limits[0]; i++) {
+        int want = i == 0;
+        arm.limit_deg[0][0] = limits[i][0];
+        arm.limit_deg[0][1] = limits[i][1];
+        CHECK(qrt_alpha_wraps(limits[i]) == want &&
+                  qrt_arm_alpha_wraps(&arm) == want,
+              "alpha in [%g, %g] %s", limits[i][0], limits[i][1],
+              want ? "wraps" : "does not wrap");
+    }
+    for (i = 0; i < sizeof wrap / sizeof wrap[0]; i++)
+        CHECK(qrt_wrap_deg(wrap[i][0]) == wrap[i][1], "wrap %g gave %g, not %g",
+              wrap[i][0], qrt_wrap_deg(wrap[i][0]), wrap[i][1]);
+}
+
 int main(void)
 {
     struct qrt_arm arm;
@@ -145,6 +176,7 @@ int main(void)
     test_fk_matches_reference(&arm);
     test_ik_round_trip(&arm);
     test_paper_equations();
+    test_alpha_wrap();
     {
         double bad[3] = {0, -41, 0}, nan_q[3] = {NAN, 0, 0};
         CHECK(qrt_arm_check_joints(&arm, bad) == QRT_E_LIMITS, "limits");
