@@ -135,6 +135,17 @@ class Daemon:
         self.log.seek(0)
         return self.log.read()
 
+    def wait_text(self, *needles, timeout=10.0):
+        """The log once it holds every needle, or as it is at the timeout:
+        the daemon writes its log on a thread of its own, so a line may
+        reach the file after the plan or status that follows it on LCM."""
+        end = time.time() + timeout
+        while True:
+            text = self.text()
+            if all(n in text for n in needles) or time.time() >= end:
+                return text
+            time.sleep(0.02)
+
     def rss_kib(self):
         with open(f"/proc/{self.proc.pid}/status") as f:
             for line in f:

@@ -37,8 +37,9 @@ def test_authenticated_messages_are_planned(daemon):
     st = c.wait_status(lambda s: s.messages_authenticated >= 2)
     assert st.lcm_input == "authenticated"
     assert st.messages_authenticated >= 2 and st.messages_unsigned == 0
-    assert "trusted senders: drives (joints), op (operator), s0 (sensor), " \
-           "s1 (sensor)" in d.text()
+    trusted = ("trusted senders: drives (joints), op (operator), s0 (sensor), "
+               "s1 (sensor)")
+    assert trusted in d.wait_text(trusted)
 
 
 def test_refusals_are_counted_and_the_daemon_keeps_serving(daemon, tmp_path):
@@ -105,12 +106,13 @@ def test_refusals_are_counted_and_the_daemon_keeps_serving(daemon, tmp_path):
     assert (st.auth_unsigned, st.auth_unknown_sender, st.auth_bad_mac,
             st.auth_not_permitted, st.auth_replayed, st.auth_malformed,
             st.auth_counter_ahead) == (2, 1, 2, 2, 2, 2, 1), d.text()
-    log = d.text()
-    for what in ("refused (unsigned)", "'mallory' has no key",
-                 "MAC of 'op' does not verify", "'s0' is a sensor key",
-                 "sensor key 's1' sent a scan of sensor 's0'", "did not grow",
-                 "signed it for channel QRT_SCAN", "does not match the",
-                 "ahead of this computer's clock"):
+    expected = ("refused (unsigned)", "'mallory' has no key",
+                "MAC of 'op' does not verify", "'s0' is a sensor key",
+                "sensor key 's1' sent a scan of sensor 's0'", "did not grow",
+                "signed it for channel QRT_SCAN", "does not match the",
+                "ahead of this computer's clock")
+    log = d.wait_text(*expected)
+    for what in expected:
         assert what in log, what
     # none of them made a plan or changed the picture
     refused = {2, 3, 4, 5, 7, 8}
@@ -159,7 +161,8 @@ def test_without_keys_unsigned_input_is_taken_and_the_status_says_so(daemon):
     assert c.wait_plan(lambda p: p.status == "ok") is not None, d.text()
     st = c.wait_status(lambda s: s.messages_unsigned >= 2)
     assert st.lcm_input == "unsigned accepted" and st.messages_authenticated == 0
-    assert "no --keys: unsigned LCM messages are taken" in d.text()
+    assert "no --keys: unsigned LCM messages are taken" in \
+        d.wait_text("no --keys: unsigned LCM messages are taken")
 
 
 def run_daemon(*args, timeout=20):

@@ -67,7 +67,7 @@ def test_replans_on_every_scan_and_reports_a_blocked_path(daemon):
     p = c.wait_plan(after=n)
     assert p is not None, d.text()
     assert p.executing_path_blocked, "the blocked path went unreported"
-    assert "blocked" in d.text()
+    assert "blocked" in d.wait_text("blocked")
     # and the next scan, same obstacles: a fresh plan, not blocked
     n = len(c.plans)
     c.publish("QRT_SCAN", scan_from_points(wall))
@@ -161,9 +161,10 @@ def test_the_log_says_what_the_daemon_made_of_its_options(daemon):
                   "--counts-per-deg", "1000,2000,-500", "--speed", "40,10,20",
                   "--accel", "80,20,40", "--offset-counts", "5000,-20000,7",
                   keys=[("op", "operator")])
-    text = d.text()
-    assert ("arm: links 0.1,0.4,0.45 m, radii 0.03,0.025,0.02 m, limits "
-            "-180..180 -10..170 -150..130 deg") in text, text
+    arm = ("arm: links 0.1,0.4,0.45 m, radii 0.03,0.025,0.02 m, limits "
+           "-180..180 -10..170 -150..130 deg")
+    text = d.wait_text(arm)
+    assert arm in text, text
     assert ("CAN qrt_no_such_bus: nodes 4,5,6, counts/deg 1000,2000,-500, "
             "counts at 0 deg 5000,-20000,7, speed 40,10,20 deg/s, "
             "accel 80,20,40 deg/s^2") in text, text
@@ -207,10 +208,11 @@ def test_bad_messages_get_a_status_and_the_daemon_keeps_serving(daemon):
     assert st is not None and st.scans_rejected >= 7, d.text()
     assert st.requests_rejected >= 1
     assert c.wait_status(lambda s: s.joint_states_rejected == 1) is not None
-    log = d.text()
-    for what in ("wrong type fingerprint", "claims 2147483647 returns",
-                 "non-finite", "not a unit quaternion", "joint state refused",
-                 "bad sensor_id length"):
+    expected = ("wrong type fingerprint", "claims 2147483647 returns",
+                "non-finite", "not a unit quaternion", "joint state refused",
+                "bad sensor_id length")
+    log = d.wait_text(*expected)
+    for what in expected:
         assert what in log, what
     # an unreachable goal and out-of-limit joints: statuses, not crashes
     # (each request after a fresh scan: without one the plan would say

@@ -53,7 +53,8 @@ def test_stale_and_future_scans_are_refused_and_counted(daemon):
     assert p is not None, [(q.status, q.points) for _, q in c.plans[n:]]
     st = c.wait_status(lambda s: s.scans_future == 1)
     assert st.scans_future == 1, d.text()
-    assert "ahead of this computer's clock" in d.text()
+    assert "ahead of this computer's clock" in \
+        d.wait_text("ahead of this computer's clock")
     assert max(q.points for _, q in c.plans[n:]) == 80
 
 
@@ -132,7 +133,7 @@ def test_log_lines_escape_control_characters(daemon):
     c.publish("QRT_SCAN_\x1b[2J\x07forged", b"\x00" * 40)
     st = c.wait_status(lambda s: s.scans_rejected == 1)
     assert st is not None and st.scans_rejected == 1, d.text()
-    log = d.text()
+    log = d.wait_text("QRT_SCAN_\\x1b[2J\\x07forged")
     assert "QRT_SCAN_\\x1b[2J\\x07forged" in log, log
     assert "\x1b" not in log and "\x07" not in log
 
