@@ -50,6 +50,15 @@
  *   proved free  shown collision-free by the mask walk (every node the
  *               motion's cell boxes cover is free) or by conservative
  *               advancement against the points themselves.
+ *   exact points  the obstacle points as the caller gave them; the table
+ *               holds them (to float rounding) while they fit, and past
+ *               QRT_MAX_POINTS holds merged points instead: voxel centres,
+ *               each standing for every point of its voxel (qrtplan/points.h).
+ *   clearance   of a configuration: the least, over points and links, of
+ *               the point's distance to the link's segment minus the link's
+ *               radius and the workspace margin (metres); <= 0 means the
+ *               configuration collides (docs/spec.md, the rule of
+ *               section Collision).
  */
 #ifndef QRTPLAN_PLANNER_H
 #define QRTPLAN_PLANNER_H
@@ -91,6 +100,15 @@ struct qrt_plan {
     long cells_blocked; /* -1 when the whole mask was not built */
     long points, points_ignored, points_dropped;
     double voxel_m; /* 0 while points are exact */
+    /* start_blocked and goal_blocked: end_measured is 1 when the table
+     * holds the exact points, and end_clearance_m is then the blocked end's
+     * clearance (of its configurations, the clearest; <= 0: every one
+     * collides, and the detail says so). 0 under merged points: the core
+     * cannot tell a collision from the merging's inflation, says neither,
+     * and a caller holding the exact points measures them with
+     * qrt_planner_clearance (docs/spec.md section Statuses). */
+    int end_measured;
+    double end_clearance_m;
 };
 
 /* struct qrt_planner holds all state; its size is fixed at compile time by
@@ -200,6 +218,15 @@ int qrt_planner_check_path(const struct qrt_planner *pl,
 int qrt_planner_check_path_now(struct qrt_planner *pl,
                                const double (*waypoints_deg)[3], int n,
                                int *first_blocked);
+
+/* The clearance of the arm at joints q_deg from the n points xyz (3n
+ * doubles, metres, base frame), with this planner's arm and margin_m: the
+ * exact check of the rule of docs/spec.md section Collision, for a caller
+ * that holds the exact points (they may be passed in parts; the least of
+ * the parts' answers is the whole's). A pure function of those: it
+ * neither reads nor changes the point table. 1e30 when n is 0. */
+double qrt_planner_clearance(const struct qrt_planner *pl,
+                             const double q_deg[3], const double *xyz, long n);
 
 /* The ABI guard. The sizes of struct qrt_planner and struct qrt_plan come
  * from the compile-time settings above, which the caller's compiler reads

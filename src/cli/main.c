@@ -10,6 +10,7 @@
 
 #include "args.h"
 #include "budget.h"
+#include "end_check.h"
 #include "gen.h"
 #include "plan_json.h"
 #include "qrtplan/qrtplan.h"
@@ -296,8 +297,48 @@ static int prepare(const char *path, struct scene *sc, int use_astar,
     return 0;
 }
 
+static void end_check_points(void *ctx, const double *xyz, long n)
+{
+    end_check_add((struct end_check *)ctx, xyz, n);
+}
+
+/* A start or goal the core could not prove free: where it holds merged
+ * points, the scene's points are read once more (they are never held
+ * whole) and measured as given, so that the detail says "collides" only
+ * when they collide; standard input cannot be read again, and the core's
+ * sentence, which claims neither, stays. detail receives the sentence. */
+static void measure_blocked_end(const char *path, const struct scene *sc,
+                                uint64_t max_memory, struct qrt_plan *plan,
+                                char *detail, size_t len)
+{
+    struct end_check c;
+    struct scene again;
+    struct scene_sink sink;
+    char err[512];
+    if (plan->status != QRT_STATUS_START_BLOCKED &&
+        plan->status != QRT_STATUS_GOAL_BLOCKED)
+        return;
+    if (end_check_needed(plan)) {
+        if (strcmp(path, "-") == 0)
+            return;
+        end_check_begin(&c, &planner, &sc->params.arm, plan, &sc->start,
+                        &sc->goal);
+        sink.begin = NULL;
+        sink.add = end_check_points;
+        sink.ctx = &c;
+        budget_init(max_memory, sizeof planner + PROGRAM_BYTES);
+        if (scene_load(path, &sink, &again, err, sizeof err))
+            return; /* read once already: changed under us; claim nothing */
+        plan->end_measured = 1;
+        plan->end_clearance_m = end_check_clearance(&c);
+    }
+    end_check_detail(plan, sc->params.cspace_margin_deg, detail, len);
+    plan->detail = detail;
+}
+
 static int cmd_plan(int argc, char **argv)
 {
+    char detail[END_CHECK_DETAIL_LEN];
     const char *scene_path = NULL, *out_path = NULL;
     struct scene sc;
     struct qrt_plan plan;
@@ -339,6 +380,8 @@ static int cmd_plan(int argc, char **argv)
     t.search_us = now_us() - t1;
     if (rc != QRT_OK)
         return fail(scene_name(scene_path), qrt_err_name(rc));
+    measure_blocked_end(scene_path, &sc, max_memory, &plan, detail,
+                        sizeof detail);
     out = open_output(out_path);
     if (!out)
         return fail(out_path, "cannot open for writing");

@@ -61,6 +61,10 @@ void plan_write_json(FILE *out, const struct qrt_plan *plan,
             fprintf(out, ",\n");
         }
     }
+    if ((plan->status == QRT_STATUS_START_BLOCKED ||
+         plan->status == QRT_STATUS_GOAL_BLOCKED) &&
+        plan->end_measured)
+        fprintf(out, "  \"end_clearance_m\": %.6f,\n", plan->end_clearance_m);
     fprintf(out,
             "  \"stats\": {\"points\": %ld, \"points_ignored\": %ld, "
             "\"points_dropped\": %ld, \"voxel_m\": %g, \"cells_blocked\": %ld, "

@@ -314,7 +314,31 @@ static void collect_ends(struct qrt_planner *pl, const double q[3],
     }
 }
 
-enum end_outcome { END_OK, END_UNREACHABLE, END_COLLIDES, END_STRANDED };
+/* END_COLLIDES only where the exact points collide; END_UNPROVEN where
+ * the end is not proved free and no collision is shown: merged points, or
+ * exact ones within the inflation of rounding and the C-space margin. */
+enum end_outcome {
+    END_OK,
+    END_UNREACHABLE,
+    END_COLLIDES,
+    END_UNPROVEN,
+    END_STRANDED
+};
+
+/* The clearance of q by the rule itself, from the table's exact points
+ * (the caller checks that they are exact): each radius less the float
+ * rounding of the stored points, so that a value <= 0 is a collision of
+ * the points as given; the rounding added back, so the value is theirs
+ * to within it. */
+static double exact_clearance(const struct qrt_planner *pl, const double q[3])
+{
+    double radius[3], rounding = qrt_points_inflation_m(&pl->points);
+    int k;
+    for (k = 0; k < 3; k++)
+        radius[k] =
+            pl->params.arm.link_radius_m[k] + pl->params.margin_m - rounding;
+    return qrt_clearance(&pl->params.arm, radius, &pl->points, q) - rounding;
+}
 
 /* The joints a start or goal may take, nearest to ref first: the target's
  * own for joints, every IK branch for an end-effector point. Returns how
@@ -347,14 +371,19 @@ static int end_joints(const struct qrt_planner *pl, const struct qrt_target *t,
 }
 
 /* Turn a start or goal into joints and its lattice connections. For an
- * end-effector point every IK branch is tried, nearest to ref first. */
+ * end-effector point every IK branch is tried, nearest to ref first. When
+ * no branch is proved free and the points are exact, *clear_m is the
+ * clearest branch's exact clearance and *measured 1 (else 0). */
 static enum end_outcome resolve_end(struct qrt_planner *pl,
                                     const struct qrt_target *t,
                                     const double ref[3], double q[3],
-                                    struct qrt_ends *ends)
+                                    struct qrt_ends *ends, int *measured,
+                                    double *clear_m)
 {
     double sols[4][3], radius[3];
     int n, i, any_free = 0;
+    *measured = 0;
+    *clear_m = 0.0;
     exact_radii(pl, radius);
     n = end_joints(pl, t, ref, sols);
     if (n == 0)
@@ -373,7 +402,18 @@ static enum end_outcome resolve_end(struct qrt_planner *pl,
         }
     }
     copy_joints(q, sols[0]);
-    return any_free ? END_STRANDED : END_COLLIDES;
+    if (any_free)
+        return END_STRANDED;
+    if (pl->points.voxel_m > 0.0)
+        return END_UNPROVEN; /* merged: a collision cannot be told */
+    *measured = 1;
+    *clear_m = exact_clearance(pl, sols[0]);
+    for (i = 1; i < n; i++) {
+        double c = exact_clearance(pl, sols[i]);
+        if (c > *clear_m)
+            *clear_m = c;
+    }
+    return *clear_m <= 0.0 ? END_COLLIDES : END_UNPROVEN;
 }
 
 static int check_target(const struct qrt_arm *arm, const struct qrt_target *t)
@@ -522,9 +562,13 @@ static void reset_plan(const struct qrt_planner *pl, struct qrt_plan *plan)
     plan->points_ignored = pl->points.ignored_far;
     plan->points_dropped = pl->points.dropped;
     plan->voxel_m = pl->points.voxel_m;
+    plan->end_measured = 0;
+    plan->end_clearance_m = 0.0;
 }
 
-static const char *end_detail(enum end_outcome o, int is_goal)
+/* merged: the table holds merged points (END_UNPROVEN cannot say whether
+ * the end is clear) */
+static const char *end_detail(enum end_outcome o, int is_goal, int merged)
 {
     switch (o) {
     case END_UNREACHABLE:
@@ -533,6 +577,20 @@ static const char *end_detail(enum end_outcome o, int is_goal)
     case END_COLLIDES:
         return is_goal ? "goal configuration collides with obstacle points"
                        : "start configuration collides with obstacle points";
+    case END_UNPROVEN:
+        if (merged)
+            return is_goal ? "goal cannot be proved free under point "
+                             "merging; only the exact points can tell "
+                             "whether it collides"
+                           : "start cannot be proved free under point "
+                             "merging; only the exact points can tell "
+                             "whether it collides";
+        return is_goal ? "goal is clear of the points, but not by the "
+                         "C-space margin and rounding the planner adds, so "
+                         "cannot be proved free"
+                       : "start is clear of the points, but not by the "
+                         "C-space margin and rounding the planner adds, so "
+                         "cannot be proved free";
     case END_STRANDED:
         return is_goal ? "goal is free but no move to it from the lattice "
                          "can be proved safe"
@@ -707,6 +765,7 @@ static void plan_on_mask(struct qrt_planner *pl, const struct qrt_target *start,
     const double *ref;
     double qs[3], qg[3];
     long len;
+    int merged = pl->points.voxel_m > 0.0;
 
     reset_plan(pl, plan);
     if (pl->points.dropped > 0) {
@@ -715,18 +774,20 @@ static void plan_on_mask(struct qrt_planner *pl, const struct qrt_target *start,
         return;
     }
     ref = goal->kind == QRT_TARGET_JOINTS ? goal->value : origin;
-    o = resolve_end(pl, start, ref, qs, &seeds);
+    o = resolve_end(pl, start, ref, qs, &seeds, &plan->end_measured,
+                    &plan->end_clearance_m);
     if (o != END_UNREACHABLE)
         copy_joints(plan->start_deg, qs);
     if (o != END_OK) {
-        set_status(plan, end_status(o, 0), end_detail(o, 0));
+        set_status(plan, end_status(o, 0), end_detail(o, 0, merged));
         return;
     }
-    o = resolve_end(pl, goal, qs, qg, &goals);
+    o = resolve_end(pl, goal, qs, qg, &goals, &plan->end_measured,
+                    &plan->end_clearance_m);
     if (o != END_UNREACHABLE)
         copy_joints(plan->goal_deg, qg);
     if (o != END_OK) {
-        set_status(plan, end_status(o, 1), end_detail(o, 1));
+        set_status(plan, end_status(o, 1), end_detail(o, 1, merged));
         return;
     }
 
@@ -920,4 +981,22 @@ int qrt_planner_check_path_now(struct qrt_planner *pl,
     raster_part(pl, 0, 1, pl->check_rows);
     *first_blocked = first_blocked_segment(pl, waypoints_deg, n);
     return QRT_OK;
+}
+
+double qrt_planner_clearance(const struct qrt_planner *pl,
+                             const double q_deg[3], const double *xyz, long n)
+{
+    const struct qrt_arm *arm = &pl->params.arm;
+    double p[4][3], best = 1e30;
+    long i;
+    int k;
+    qrt_arm_fk(arm, q_deg, p);
+    for (i = 0; i < n; i++)
+        for (k = 0; k < 3; k++) {
+            double c = sqrt(qrt_seg_dist2(xyz + 3 * i, p[k], p[k + 1])) -
+                       arm->link_radius_m[k] - pl->params.margin_m;
+            if (c < best)
+                best = c;
+        }
+    return best;
 }

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "decode.hpp"
+#include "end_check.h"
 #include "lcm_loss.hpp"
 #include "log.hpp"
 #include "qrtplan/daemon_status_t.hpp"
@@ -534,6 +535,22 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
         publish_plan(nullptr, "invalid_request", why, blocked, t1 - t0,
                      check_us, mask_us, search_us, trigger_us);
         return;
+    }
+    // a blocked end the core left unmeasured (merged points) is measured
+    // against the picture's exact points: "collides" only if they collide
+    char detail[END_CHECK_DETAIL_LEN];
+    if (plan.status == QRT_STATUS_START_BLOCKED ||
+        plan.status == QRT_STATUS_GOAL_BLOCKED) {
+        if (end_check_needed(&plan)) {
+            end_check c;
+            end_check_begin(&c, pl, &opts_.params.arm, &plan, &start, &goal);
+            end_check_add(&c, gather_.data(), long(gather_.size() / 3));
+            plan.end_measured = 1;
+            plan.end_clearance_m = end_check_clearance(&c);
+        }
+        end_check_detail(&plan, opts_.params.cspace_margin_deg, detail,
+                         sizeof detail);
+        plan.detail = detail;
     }
     last_plan_ok_ = plan.status == QRT_STATUS_OK;
     publish_plan(&plan, qrt_plan_status_name(plan.status),

@@ -1,0 +1,75 @@
+#include "end_check.h"
+
+#include <stdio.h>
+
+int end_check_needed(const struct qrt_plan *plan)
+{
+    return (plan->status == QRT_STATUS_START_BLOCKED ||
+            plan->status == QRT_STATUS_GOAL_BLOCKED) &&
+           !plan->end_measured;
+}
+
+void end_check_begin(struct end_check *c, const struct qrt_planner *pl,
+                     const struct qrt_arm *arm, const struct qrt_plan *plan,
+                     const struct qrt_target *start,
+                     const struct qrt_target *goal)
+{
+    int is_goal = plan->status == QRT_STATUS_GOAL_BLOCKED, i, k;
+    const struct qrt_target *t = is_goal ? goal : start;
+    const double *reported = is_goal ? plan->goal_deg : plan->start_deg;
+    c->pl = pl;
+    if (t->kind == QRT_TARGET_JOINTS) {
+        c->n = 1;
+        for (k = 0; k < 3; k++)
+            c->q[0][k] = t->value[k];
+    } else {
+        /* the branch the plan reports is among them: its alpha is the
+         * hint for a point on the base axis */
+        c->n = qrt_arm_ik(arm, t->value, reported[0], c->q);
+    }
+    for (i = 0; i < 4; i++)
+        c->clear_m[i] = 1e30;
+}
+
+void end_check_add(struct end_check *c, const double *xyz, long n)
+{
+    int i;
+    for (i = 0; i < c->n; i++) {
+        double d = qrt_planner_clearance(c->pl, c->q[i], xyz, n);
+        if (d < c->clear_m[i])
+            c->clear_m[i] = d;
+    }
+}
+
+double end_check_clearance(const struct end_check *c)
+{
+    double best = c->n > 0 ? c->clear_m[0] : 0.0;
+    int i;
+    for (i = 1; i < c->n; i++)
+        if (c->clear_m[i] > best)
+            best = c->clear_m[i];
+    return best;
+}
+
+void end_check_detail(const struct qrt_plan *plan, double cspace_margin_deg,
+                      char *buf, size_t len)
+{
+    const char *end =
+        plan->status == QRT_STATUS_GOAL_BLOCKED ? "goal" : "start";
+    double mm = 1000.0 * plan->end_clearance_m;
+    if (plan->end_clearance_m <= 0.0)
+        snprintf(buf, len, "%s configuration collides with obstacle points",
+                 end);
+    else if (plan->voxel_m > 0.0)
+        snprintf(buf, len,
+                 "%s is clear of the points by %.1f mm beyond the margin, "
+                 "but cannot be proved free under point merging (voxel "
+                 "%.0f mm)",
+                 end, mm, 1000.0 * plan->voxel_m);
+    else
+        snprintf(buf, len,
+                 "%s is clear of the points by %.1f mm beyond the margin, "
+                 "but cannot be proved free within the C-space margin "
+                 "(%g deg) and the points' float rounding",
+                 end, mm, cspace_margin_deg);
+}

@@ -1,0 +1,55 @@
+/* The exact check of a blocked end (docs/spec.md section Statuses), for
+ * hosts that hold the exact points: where the core, holding only merged
+ * points, could neither prove a start or goal free nor tell whether it
+ * collides, the points as given decide what the plan's detail may say.
+ * The CLI streams the scene's points through it, the daemon its picture. */
+#ifndef QRT_CLI_END_CHECK_H
+#define QRT_CLI_END_CHECK_H
+
+#include <stddef.h>
+
+#include "qrtplan/planner.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Room for end_check_detail's longest sentence. */
+#define END_CHECK_DETAIL_LEN 192
+
+struct end_check {
+    const struct qrt_planner *pl;
+    int n;             /* the blocked end's configurations (IK branches) */
+    double q[4][3];    /* each configuration */
+    double clear_m[4]; /* its least clearance from the points so far */
+};
+
+/* 1 when plan is start_blocked or goal_blocked and the core left the end
+ * unmeasured (plan->end_measured 0: merged points). */
+int end_check_needed(const struct qrt_plan *plan);
+
+/* Start measuring the blocked end of plan: the configurations of start or
+ * goal (every IK branch within arm's limits of an xyz target). */
+void end_check_begin(struct end_check *c, const struct qrt_planner *pl,
+                     const struct qrt_arm *arm, const struct qrt_plan *plan,
+                     const struct qrt_target *start,
+                     const struct qrt_target *goal);
+
+/* n more exact points (3n doubles). */
+void end_check_add(struct end_check *c, const double *xyz, long n);
+
+/* The end's clearance from every point added: its clearest
+ * configuration's (<= 0: every configuration collides). */
+double end_check_clearance(const struct end_check *c);
+
+/* The detail of a blocked plan whose end was measured (plan->end_measured
+ * 1, plan->end_clearance_m the clearance): "collides" only where that is
+ * <= 0; else how clear it is, and what kept it from being proved free
+ * (the voxel edge under merging, the C-space margin otherwise). */
+void end_check_detail(const struct qrt_plan *plan, double cspace_margin_deg,
+                      char *buf, size_t len);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
