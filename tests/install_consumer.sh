@@ -25,7 +25,8 @@ cc -std=c99 "$src/main.c" $(pkg-config --cflags --libs qrtplan) -o "$work/pc"
 # divide 20).
 setting() { sed -n "s/^$1:STRING=//p" "$build/CMakeCache.txt"; }
 grid=$(setting QRT_GRID_DEG_MIN)
-points=$(setting QRT_MAX_POINTS)
+# the value built with (QRT_MAX_POINTS empty takes the profile's)
+points=$(sed -n "s/^QRT_MAX_POINTS_USED:INTERNAL=//p" "$build/CMakeCache.txt")
 other_grid=$([ "$grid" = 10 ] && echo 5 || echo 10)
 other_points=$([ "$points" = 1024 ] && echo 2048 || echo 1024)
 # mismatch NAME EXPECTED... -- CFLAGS...: build mismatch.c with the flags

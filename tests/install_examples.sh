@@ -138,7 +138,7 @@ core=$work/core
 cmake -S "$root" -B "$work/core-build" -DQRT_CORE_ONLY=ON \
     -DCMAKE_C_COMPILER="$(setting CMAKE_C_COMPILER)" \
     -DQRT_GRID_DEG_MIN="$(setting QRT_GRID_DEG_MIN)" \
-    -DQRT_MAX_POINTS="$(setting QRT_MAX_POINTS)" >/dev/null
+    -DQRT_MAX_POINTS="$(setting QRT_MAX_POINTS_USED)" >/dev/null
 cmake --build "$work/core-build" -j 2 >/dev/null
 cmake --install "$work/core-build" --prefix "$core" >/dev/null
 for f in lib/libqrtplan.a include/qrtplan/qrtplan.h include/qrtplan/planner.h \

@@ -10,9 +10,12 @@
 #                                          the memory-budget markers
 #   tools/memory_budget.sh --check FILE    fail if FILE's table is stale
 #
-# Profiles: "paper" is the 5 degree lattice with 16384 exact points (Cortex-A
-# boards); "small" is a 10 degree lattice with 1024 exact points, whose state
-# and stack fit a Cortex-M7's 512 KiB of SRAM.
+# Profiles: "paper" is the 5 degree lattice with 16384 exact points, the
+# CMake board profile's settings (Cortex-A boards); "small" is a 10 degree
+# lattice with 1024 exact points, whose state and stack fit a Cortex-M7's
+# 512 KiB of SRAM; "host" is the CMake host profile's, 2^18 exact points,
+# for the robot computer's programs (x86-64 and aarch64 only: no board
+# holds its state).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 gen=$(command -v ninja >/dev/null && echo "-G Ninja" || true)
@@ -22,7 +25,7 @@ mkdir -p "$top"
 targets=("x86-64:" "armhf:cmake/toolchains/arm-linux-gnueabihf.cmake"
          "aarch64:cmake/toolchains/aarch64-linux-gnu.cmake"
          "cortex-m7:cmake/toolchains/cortex-m7.cmake")
-profiles=("paper:5:16384" "small:10:1024")
+profiles=("paper:5:16384:board" "small:10:1024:board" "host:5:262144:host")
 sram=$((512 * 1024))
 
 tool_for() { # target tool -> the target's binutils program
@@ -40,11 +43,14 @@ table() {
     for t in "${targets[@]}"; do
         local name=${t%%:*} chain=${t#*:}
         for p in "${profiles[@]}"; do
-            IFS=: read -r prof grid pts <<<"$p"
+            IFS=: read -r prof grid pts cmake_profile <<<"$p"
+            [ "$prof" = host ] && [ "$name" != x86-64 ] &&
+                [ "$name" != aarch64 ] && continue
             local dir=$top/$name-$prof
             local tc=()
             [ -n "$chain" ] && tc=(-DCMAKE_TOOLCHAIN_FILE="$PWD/$chain")
             cmake -S . -B "$dir" $gen -DQRT_CORE_ONLY=ON \
+                -DQRT_PROFILE="$cmake_profile" \
                 -DCMAKE_BUILD_TYPE=RelWithDebInfo "${tc[@]}" \
                 -DQRT_GRID_DEG_MIN="$grid" -DQRT_MAX_POINTS="$pts" >/dev/null
             cmake --build "$dir" >"$dir/build.log" 2>&1 ||

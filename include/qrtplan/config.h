@@ -24,7 +24,8 @@
 /* How many obstacle points the point table holds. Past this the table is
  * re-quantised onto a coarser voxel grid (see points.h) rather than
  * overflowing; only when even the coarsest voxels do not fit are points
- * dropped, and the plan then says so. */
+ * dropped, and the plan then says so. This default is the board's; CMake's
+ * host profile (a full build) sets 262144 (docs/embedded.md, Profiles). */
 #ifndef QRT_MAX_POINTS
 #define QRT_MAX_POINTS 16384
 #endif

@@ -100,14 +100,16 @@ struct qrt_plan {
     long cells_blocked; /* -1 when the whole mask was not built */
     long points, points_ignored, points_dropped;
     double voxel_m; /* 0 while points are exact */
-    /* start_blocked and goal_blocked: end_measured is 1 when the table
-     * holds the exact points, and end_clearance_m is then the blocked end's
-     * clearance (of its configurations, the clearest; <= 0: every one
-     * collides, and the detail says so). 0 under merged points: the core
-     * cannot tell a collision from the merging's inflation, says neither,
-     * and a caller holding the exact points measures them with
-     * qrt_planner_clearance (docs/spec.md section Statuses). */
-    int end_measured;
+    /* start_blocked and goal_blocked: end_free is 1 when the blocked end
+     * was proved free and only its join to the lattice was not. Else
+     * end_measured is 1 when the table holds the exact points, and
+     * end_clearance_m is then the end's clearance (of its configurations,
+     * the clearest; <= 0: every one collides, and only then does the
+     * detail say so), or 0 under merged points: the core cannot tell a
+     * collision from the merging's inflation, says neither, and a caller
+     * holding the exact points measures them with qrt_planner_clearance
+     * (docs/spec.md section Statuses). */
+    int end_free, end_measured;
     double end_clearance_m;
 };
 

@@ -128,6 +128,16 @@ struct qrti_sweep_pose {
 #define QRTI_SWEEP_POSES                                                       \
     (QRT_MAX_NODES >= 4096 ? 256 : QRT_MAX_NODES >= 2048 ? 128 : 64)
 
+/* The clustering scratch of a whole build's parts, for a table of n
+ * points: at most 5n/2 + 16 entries (src/core/cluster.c). The search's
+ * node arrays, idle until the next search, lend it for a table that small
+ * (a board's); a larger table (the host profile's) has its own, one a
+ * part (there are at most two), and no table goes without clustering,
+ * whose point-by-point fallback is many times slower. */
+#define QRTI_CLUSTER_SCRATCH_LEN ((long)QRT_MAX_POINTS * 5 / 2 + 16)
+#define QRTI_OWN_CLUSTER_SCRATCH                                               \
+    (QRTI_CLUSTER_SCRATCH_LEN > QRT_MAX_NODES ? QRTI_CLUSTER_SCRATCH_LEN : 1)
+
 struct qrt_raster; /* the conversion's tables (src/core/raster.h) */
 
 struct qrt_planner {
@@ -191,6 +201,10 @@ struct qrt_planner {
      * that call's stack */
     struct qrt_raster *lazy_raster;
     uint64_t rows_ready[QRT_ROW_SET_WORDS];
+    /* each part's clustering scratch where the node arrays are too small
+     * for the table (else one unused entry a part); a row for each of the
+     * QRT_MAX_MASK_PARTS (planner.h) */
+    int32_t cluster_scratch[2][QRTI_OWN_CLUSTER_SCRATCH];
 };
 
 #ifdef __cplusplus

@@ -2,11 +2,22 @@
 
 #include <stdio.h>
 
-int end_check_needed(const struct qrt_plan *plan)
+/* a blocked end that was not proved free */
+static int end_unproven(const struct qrt_plan *plan)
 {
     return (plan->status == QRT_STATUS_START_BLOCKED ||
             plan->status == QRT_STATUS_GOAL_BLOCKED) &&
-           !plan->end_measured;
+           !plan->end_free;
+}
+
+int end_check_needed(const struct qrt_plan *plan)
+{
+    return end_unproven(plan) && !plan->end_measured;
+}
+
+int end_check_measured(const struct qrt_plan *plan)
+{
+    return end_unproven(plan) && plan->end_measured;
 }
 
 void end_check_begin(struct end_check *c, const struct qrt_planner *pl,

@@ -24,9 +24,14 @@ struct end_check {
     double clear_m[4]; /* its least clearance from the points so far */
 };
 
-/* 1 when plan is start_blocked or goal_blocked and the core left the end
- * unmeasured (plan->end_measured 0: merged points). */
+/* 1 when plan is start_blocked or goal_blocked, its end not proved free
+ * (plan->end_free 0), and the core left it unmeasured (plan->end_measured
+ * 0: merged points). */
 int end_check_needed(const struct qrt_plan *plan);
+
+/* 1 when such an end has been measured (plan->end_measured 1, by the core
+ * or by the caller): end_check_detail then gives its sentence. */
+int end_check_measured(const struct qrt_plan *plan);
 
 /* Start measuring the blocked end of plan: the configurations of start or
  * goal (every IK branch within arm's limits of an xyz target). */

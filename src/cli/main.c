@@ -49,16 +49,18 @@ static const char overview[] =
 #define MAX_MEMORY_HELP                                                        \
     "  --max-memory BYTES  the most memory it may hold (default 1G = 1 GiB;\n" \
     "                    bytes, or with K, M or G, powers of 1024; at least\n" \
-    "                    16M): the planner's ~4 MB state and 8 MiB for the\n"  \
-    "                    program, then every buffer it allocates to read\n"    \
-    "                    the scene, counted before it is made: the JSON\n"     \
-    "                    text (at most 1 GiB), its tree without the points\n"  \
-    "                    array (~50 B a value), one point at a time, and\n"    \
-    "                    ~140 KiB to stream a PCD file into the planner's\n"   \
-    "                    fixed table, however many points it holds or\n"       \
-    "                    claims. A scene that needs more is refused (exit\n"   \
-    "                    2). points_file must be a regular file (a FIFO or\n"  \
-    "                    a device is refused at once).\n"
+    "                    16M, 23M in a host build): the planner's state\n"     \
+    "                    (~4 MB, ~14 MB in a host build, whose --version\n"    \
+    "                    says 262144 points) and 8 MiB for the program,\n"     \
+    "                    then every buffer it allocates to read the scene,\n"  \
+    "                    counted before it is made: the JSON text (at most\n"  \
+    "                    1 GiB), its tree without the points array (~50 B\n"   \
+    "                    a value), one point at a time, and ~140 KiB to\n"     \
+    "                    stream a PCD file into the planner's fixed table,\n"  \
+    "                    however many points it holds or claims. A scene\n"    \
+    "                    that needs more is refused (exit 2). points_file\n"   \
+    "                    must be a regular file (a FIFO or a device is\n"      \
+    "                    refused at once).\n"
 
 static const char plan_help[] =
     "usage: qrtplan plan SCENE.json [-o PLAN.json] [--dijkstra] "
@@ -84,7 +86,7 @@ static const char plan_help[] =
     "  --as-read         the default, accepted for older "
     "scripts\n" MAX_MEMORY_HELP "\n"
     "stats.time_us is this run's wall clock; in a fresh process its total\n"
-    "is mostly the first touch of the planner's ~4 MB state (compare builds\n"
+    "is mostly the first touch of the planner's state (compare builds\n"
     "with tools/bench.sh, not with it).\n"
     "\n"
     "Exit status: 0 for every well-formed scene, whatever the plan's status\n"
@@ -186,7 +188,8 @@ static int close_output(FILE *f, const char *path)
     return bad ? fail(path ? path : "stdout", "write failed") : 0;
 }
 
-/* The planner state is 4 MiB: static, as on a board. */
+/* The planner state (3.8 MiB in the board profile, 13.5 MiB in the host
+ * profile's, docs/embedded.md): static, as on a board. */
 static struct qrt_planner planner;
 
 /* The memory budget: --max-memory, or this. Besides the planner's state
@@ -195,8 +198,15 @@ static struct qrt_planner planner;
  * resident set is 3-5 MB with a small scene, the planner's state
  * included). */
 #define DEFAULT_MAX_MEMORY ((uint64_t)1 << 30)
-#define MIN_MAX_MEMORY ((uint64_t)16 << 20)
 #define PROGRAM_BYTES ((uint64_t)8 << 20)
+/* the state and the program with a MiB to read a scene, in whole MiB; 16
+ * MiB at least (a board profile's state needs less) */
+#define MIN_STATE_MIB                                                          \
+    ((sizeof planner + PROGRAM_BYTES + ((uint64_t)1 << 20) +                   \
+      ((1u << 20) - 1)) >>                                                     \
+     20)
+#define MIN_MAX_MEMORY                                                         \
+    ((MIN_STATE_MIB > 16 ? (uint64_t)MIN_STATE_MIB : (uint64_t)16) << 20)
 
 /* --max-memory's value: 0, or an exit status. */
 static int parse_max_memory(const char *arg, uint64_t *bytes)
@@ -315,9 +325,6 @@ static void measure_blocked_end(const char *path, const struct scene *sc,
     struct scene again;
     struct scene_sink sink;
     char err[512];
-    if (plan->status != QRT_STATUS_START_BLOCKED &&
-        plan->status != QRT_STATUS_GOAL_BLOCKED)
-        return;
     if (end_check_needed(plan)) {
         if (strcmp(path, "-") == 0)
             return;
@@ -332,6 +339,8 @@ static void measure_blocked_end(const char *path, const struct scene *sc,
         plan->end_measured = 1;
         plan->end_clearance_m = end_check_clearance(&c);
     }
+    if (!end_check_measured(plan))
+        return;
     end_check_detail(plan, sc->params.cspace_margin_deg, detail, len);
     plan->detail = detail;
 }

@@ -1,5 +1,7 @@
 #include "plan_json.h"
 
+#include "end_check.h"
+
 #include <stdlib.h>
 
 /* The shortest decimal that reads back as exactly x: a waypoint on a joint
@@ -61,9 +63,7 @@ void plan_write_json(FILE *out, const struct qrt_plan *plan,
             fprintf(out, ",\n");
         }
     }
-    if ((plan->status == QRT_STATUS_START_BLOCKED ||
-         plan->status == QRT_STATUS_GOAL_BLOCKED) &&
-        plan->end_measured)
+    if (end_check_measured(plan))
         fprintf(out, "  \"end_clearance_m\": %.6f,\n", plan->end_clearance_m);
     fprintf(out,
             "  \"stats\": {\"points\": %ld, \"points_ignored\": %ld, "

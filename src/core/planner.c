@@ -138,9 +138,14 @@ static void raster_part(struct qrt_planner *pl, int part, int nparts,
     if (rows)
         qrt_raster_only_rows(&r, rows);
     /* the search's node arrays are idle until the next search: each part
-     * lends its own for the clustering */
+     * lends its own for the clustering, unless the table is too large for
+     * them and the planner has scratch of its own (planner_internal.h) */
     scratch = part == 0 ? pl->heap_pos : pl->search.cluster_scratch;
-    if (qrt_cluster_scratch_len(pl->points.count) <= QRT_MAX_NODES) {
+    if (QRTI_OWN_CLUSTER_SCRATCH > 1)
+        scratch = pl->cluster_scratch[part];
+    if (qrt_cluster_scratch_len(pl->points.count) <=
+        (QRTI_OWN_CLUSTER_SCRATCH > 1 ? QRTI_OWN_CLUSTER_SCRATCH
+                                      : QRT_MAX_NODES)) {
         struct cluster_ctx ctx;
         double cell;
         ctx.raster = &r;
@@ -562,7 +567,7 @@ static void reset_plan(const struct qrt_planner *pl, struct qrt_plan *plan)
     plan->points_ignored = pl->points.ignored_far;
     plan->points_dropped = pl->points.dropped;
     plan->voxel_m = pl->points.voxel_m;
-    plan->end_measured = 0;
+    plan->end_free = plan->end_measured = 0;
     plan->end_clearance_m = 0.0;
 }
 
@@ -779,6 +784,7 @@ static void plan_on_mask(struct qrt_planner *pl, const struct qrt_target *start,
     if (o != END_UNREACHABLE)
         copy_joints(plan->start_deg, qs);
     if (o != END_OK) {
+        plan->end_free = o == END_STRANDED;
         set_status(plan, end_status(o, 0), end_detail(o, 0, merged));
         return;
     }
@@ -787,6 +793,7 @@ static void plan_on_mask(struct qrt_planner *pl, const struct qrt_target *start,
     if (o != END_UNREACHABLE)
         copy_joints(plan->goal_deg, qg);
     if (o != END_OK) {
+        plan->end_free = o == END_STRANDED;
         set_status(plan, end_status(o, 1), end_detail(o, 1, merged));
         return;
     }

@@ -539,15 +539,14 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
     // a blocked end the core left unmeasured (merged points) is measured
     // against the picture's exact points: "collides" only if they collide
     char detail[END_CHECK_DETAIL_LEN];
-    if (plan.status == QRT_STATUS_START_BLOCKED ||
-        plan.status == QRT_STATUS_GOAL_BLOCKED) {
-        if (end_check_needed(&plan)) {
-            end_check c;
-            end_check_begin(&c, pl, &opts_.params.arm, &plan, &start, &goal);
-            end_check_add(&c, gather_.data(), long(gather_.size() / 3));
-            plan.end_measured = 1;
-            plan.end_clearance_m = end_check_clearance(&c);
-        }
+    if (end_check_needed(&plan)) {
+        end_check c;
+        end_check_begin(&c, pl, &opts_.params.arm, &plan, &start, &goal);
+        end_check_add(&c, gather_.data(), long(gather_.size() / 3));
+        plan.end_measured = 1;
+        plan.end_clearance_m = end_check_clearance(&c);
+    }
+    if (end_check_measured(&plan)) {
         end_check_detail(&plan, opts_.params.cspace_margin_deg, detail,
                          sizeof detail);
         plan.detail = detail;

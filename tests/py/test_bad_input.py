@@ -237,11 +237,13 @@ def test_huge_cloud_is_quantised_or_refused_never_overflows(qrtplan, tmp_path):
     assert code == 0, err
     assert plan["stats"]["voxel_m"] > 0 and plan["stats"]["points_dropped"] == 0
     assert plan["status"] in ("ok", "no_path")
-    # ... and one filling the whole reach, which no voxel size can hold
-    cube = rng.uniform(-1.0, 1.0, size=(2_000_000, 3)).astype(np.float32)
+    # ... and one filling the whole reach, which no voxel size can hold: a
+    # 7 m cube has 1.3 million voxels of 64 mm, and 2 million points take
+    # most of them, more than even the host profile's table (2^18)
+    cube = rng.uniform(-3.5, 3.5, size=(2_000_000, 3)).astype(np.float32)
     write(tmp_path, pcd_header(len(cube)) + cube.tobytes(), "cloud.pcd")
     code, plan, err = plan_scene(with_(points=None, points_file="cloud.pcd",
-                                       arm={"links_m": [0.09, 1.5, 1.5]}), tmp_path)
+                                       arm={"links_m": [0.09, 3.0, 3.0]}), tmp_path)
     assert code == 0, err
     assert plan["status"] == "capacity" and plan["stats"]["points_dropped"] > 0
     assert str(plan["stats"]["points_dropped"]) in plan["detail"]

@@ -40,19 +40,20 @@ def write_pcd(path, pts):
     path.write_bytes(head.encode() + pts.astype("<f4").tobytes())
 
 
-def slot_points(n, x_min=-1.0):
-    """n points in the reach ball (x >= x_min) outside the slot
-    |y| < FACE_Y, and a row on each face at exactly FACE_Y from the arm's
-    axis."""
+def slot_points(n, hole=False):
+    """n points in the reach ball outside the slot |y| < FACE_Y, and a row
+    on each face at exactly FACE_Y from the arm's axis. hole: none where
+    x < 0.25 and z > -0.1 either, round the arm standing straight up."""
     rng = np.random.default_rng(37)
     out = []
     while sum(len(p) for p in out) < n:
         p = rng.uniform(-0.97, 0.97, size=(n, 3))
-        keep = ((np.linalg.norm(p, axis=1) <= 0.97) &
-                (np.abs(p[:, 1]) >= FACE_Y) & (p[:, 0] >= x_min))
+        keep = (np.linalg.norm(p, axis=1) <= 0.97) & (np.abs(p[:, 1]) >= FACE_Y)
+        if hole:
+            keep &= (p[:, 0] >= 0.25) | (p[:, 2] <= -0.1)
         out.append(p[keep])
     pts = np.vstack(out)[:n]
-    x = np.linspace(max(0.05, x_min), 0.9, 200)
+    x = np.linspace(0.3 if hole else 0.05, 0.9, 200)
     face = np.stack([x, np.full_like(x, FACE_Y), np.zeros_like(x)], axis=1)
     mirror = face * np.array([1.0, -1.0, 1.0])
     return np.vstack([pts, face, mirror])
@@ -64,9 +65,9 @@ def slot(tmp_path_factory):
     # enough that even 16 mm voxels overflow the table: 32 mm ones hold it
     pts = slot_points(max(46000, int(2.3 * max_points())))
     write_pcd(d / "slot.pcd", pts)
-    # the slabs only beyond x 0.3: the arm straight up is far from them
-    far = slot_points(max(46000, int(2.3 * max_points())), x_min=0.3)
-    write_pcd(d / "far.pcd", far)
+    # with room round the arm straight up: over 0.1 m from every point
+    write_pcd(d / "hole.pcd",
+              slot_points(max(46000, int(2.3 * max_points())), hole=True))
     return d, pts
 
 
@@ -108,11 +109,12 @@ def test_start_clear_under_merging_is_not_said_to_collide(slot):
 
 def test_goal_clear_under_merging_is_not_said_to_collide(slot):
     d, pts = slot
-    # the arm straight up is over 0.2 m from every point (x >= 0.3) and
-    # free; the goal lies in the slot
+    # the arm straight up is over 0.1 m from every point and free; the
+    # goal lies in the slot
     scene = slot_scene(start=(0.0, 90.0, 0.0), goal=(0.0, 0.0, 0.0),
-                       points_file="far.pcd")
+                       points_file="hole.pcd")
     p = plan(d, scene, "goal")
+    assert p["stats"]["voxel_m"] >= 0.032, p["stats"]
     assert p["status"] == "goal_blocked", p
     assert "collides" not in p["detail"], p["detail"]
     assert p["detail"].startswith("goal is clear of the points by 32.5 mm")

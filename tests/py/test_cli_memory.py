@@ -260,9 +260,11 @@ def test_large_json_scene_costs_little_more_than_its_size(qrtplan, tmp_path):
     assert default.rss < size + 24 * MiB, (size, default)
     fits = measure(["plan", path, "--max-memory", "48M"], timeout=30)
     assert planned(fits) == plan and fits.rss < 48 * MiB, fits
-    r = measure(["plan", path, "--max-memory", "20M"])
-    refused(r, "scene.json", "memory budget", "20 MiB", "--max-memory")
-    assert r.rss < 20 * MiB, r
+    # at least the least budget of a host build (23 MiB), less than the
+    # text and the state
+    r = measure(["plan", path, "--max-memory", "24M"])
+    refused(r, "scene.json", "memory budget", "24 MiB", "--max-memory")
+    assert r.rss < 24 * MiB, r
     # the same points from a binary PCD: the same plan
     (tmp_path / "cloud.pcd").write_bytes(pcd_header(len(xyz), "binary") +
                                          xyz.tobytes())

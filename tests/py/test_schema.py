@@ -100,9 +100,11 @@ def walled_in():
 
 
 def capacity_cloud(path):
-    """26^3 points, one in each 64 mm voxel (the coarsest): more than the
-    16,384 the table holds even as voxels. Binary PCD, float32."""
-    i = np.arange(26) - 12.5
+    """65^3 points, one in each 64 mm voxel (the coarsest): more than the
+    262,144 of the host profile's table holds even as voxels (and the
+    board's 16,384). Binary PCD, float32; the arm's 3 m links reach them
+    all."""
+    i = np.arange(65) - 32.5
     xyz = (np.stack(np.meshgrid(i, i, i, indexing="ij"), -1).reshape(-1, 3)
            * 0.064).astype(np.float32)
     n = len(xyz)
@@ -128,7 +130,7 @@ STATUS_SCENES = [
     ("no_path", {"points": "walled_in", "start": {"joints_deg": [90, 0, 0]},
                  "goal": {"joints_deg": [0, 0, 0]}}),
     ("capacity", {"points": None, "points_file": "cloud.pcd",
-                  "arm": {"links_m": [0.09, 1.5, 1.5]},
+                  "arm": {"links_m": [0.09, 3.0, 3.0]},
                   "start": {"joints_deg": [0, 0, 0]},
                   "goal": {"joints_deg": [10, 0, 0]}}),
 ]
