@@ -52,8 +52,9 @@
  *               advancement against the points themselves.
  *   exact points  the obstacle points as the caller gave them; the table
  *               holds them (to float rounding) while they fit, and past
- *               QRT_MAX_POINTS holds merged points instead: voxel centres,
- *               each standing for every point of its voxel (qrtplan/points.h).
+ *               QRT_MAX_POINTS holds merged points instead: one entry a
+ *               voxel, the box of its points, standing for every one of
+ *               them (qrtplan/points.h).
  *   clearance   of a configuration: the least, over points and links, of
  *               the point's distance to the link's segment minus the link's
  *               radius and the workspace margin (metres); <= 0 means the

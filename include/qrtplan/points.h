@@ -1,11 +1,14 @@
 /* The obstacle point table: the inspection points the planner avoids.
  *
  * Points are kept exactly while they fit. When more arrive than
- * QRT_MAX_POINTS, every stored point is moved onto the centre of its voxel
- * on a grid of QRT_VOXEL_BASE_M, and duplicates merge; if that still
- * overflows, the voxel edge doubles, up to QRT_VOXEL_MAX_M. A voxel centre
- * stands for every point in its voxel, so the planner inflates every
- * collision radius by the voxel's half-diagonal: coarser, never unsafe.
+ * QRT_MAX_POINTS, the points are merged by voxel on a grid of
+ * QRT_VOXEL_BASE_M; if that still overflows, the voxel edge doubles, up to
+ * QRT_VOXEL_MAX_M. A voxel's entry keeps the box of its members (on a
+ * grid of QRT_VOXEL_BOX_STEPS steps a voxel edge, rounded outwards) and
+ * stands at the box's centre, so the planner inflates every collision
+ * radius by the largest box's half-diagonal: never more than the voxel's
+ * half-diagonal, much less where the points lie on a surface, never
+ * unsafe.
  * Only when even the coarsest voxels do not fit are points dropped, counted
  * in `dropped`, and the planner then refuses to plan (QRT_STATUS_CAPACITY).
  * Points farther from the base than any part of the arm can reach are
@@ -26,6 +29,8 @@ extern "C" {
 #define QRT_VOXEL_BASE_M 0.001
 #define QRT_VOXEL_MAX_M 0.064
 #define QRT_POINT_HASH_SLOTS (2L * QRT_MAX_POINTS)
+/* Steps of a merged entry's box along a voxel edge (a byte a bound). */
+#define QRT_VOXEL_BOX_STEPS 255
 
 /* The entries are stored by axis, entry i at (x[i], y[i], z[i]): the
  * passes over every point (the intake's reach check, the one-pass proof's
@@ -34,12 +39,18 @@ extern "C" {
 struct qrt_points {
     float x[QRT_MAX_POINTS], y[QRT_MAX_POINTS], z[QRT_MAX_POINTS];
     uint32_t hash[QRT_POINT_HASH_SLOTS]; /* voxel mode: entry index + 1 */
-    long count;                          /* entries in x, y, z */
-    long received;    /* points passed to qrt_points_add since reset */
-    long ignored_far; /* beyond reach_m */
-    long dropped;     /* lost to capacity: non-zero means do not plan */
-    double voxel_m;   /* 0 while exact, else the voxel edge in use */
-    double reach_m;   /* points farther than this are ignored */
+    /* voxel mode: entry i's box, its members' bounds along axis k in steps
+     * of voxel_m / QRT_VOXEL_BOX_STEPS from its voxel's low corner (low
+     * rounded down, high up, at least a step apart); the entry stands at
+     * the box's centre */
+    uint8_t box_lo[3][QRT_MAX_POINTS], box_hi[3][QRT_MAX_POINTS];
+    double box_radius_m; /* voxel mode: the largest box's half-diagonal */
+    long count;          /* entries in x, y, z */
+    long received;       /* points passed to qrt_points_add since reset */
+    long ignored_far;    /* beyond reach_m */
+    long dropped;        /* lost to capacity: non-zero means do not plan */
+    double voxel_m;      /* 0 while exact, else the voxel edge in use */
+    double reach_m;      /* points farther than this are ignored */
 };
 
 /* Empty the table. reach_m: points with |p| > reach_m are ignored; pass
@@ -51,7 +62,8 @@ void qrt_points_reset(struct qrt_points *pts, double reach_m);
 int qrt_points_add(struct qrt_points *pts, const double *xyz, long n);
 
 /* Radius every stored point stands for beyond its stored position: the
- * voxel's half-diagonal plus the float rounding of the stored position. */
+ * largest merged box's half-diagonal (at most the voxel's) plus the float
+ * rounding of the stored position. */
 double qrt_points_inflation_m(const struct qrt_points *pts);
 
 /* Read-only views of a table's axes (or of any points kept by axis), for

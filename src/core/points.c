@@ -49,16 +49,72 @@ static long find_voxel(const struct qrt_points *pts, const long v[3],
     }
 }
 
-static float voxel_centre(long v, double voxel_m)
+/* A merged entry's box (points.h) is kept in steps of voxel_m /
+ * QRT_VOXEL_BOX_STEPS. The entry stands at the box's centre, held at least
+ * BOX_INSET steps inside its voxel: the voxel is read back from the stored
+ * float position (entry_voxel), which that inset keeps out of reach of
+ * float rounding (a 16th of a 1 mm voxel, 62 um, against 2^-24 of a
+ * coordinate); the radius pays for the shift. */
+#define BOX_INSET 16
+
+/* A coordinate's bounds in steps from its voxel's low corner v * voxel_m:
+ * rounded outwards (by more than the double arithmetic's error), inside
+ * the voxel, at least a step apart. */
+static void point_box(double x, long v, double voxel_m, uint8_t *lo,
+                      uint8_t *hi)
 {
-    return (float)(((double)v + 0.5) * voxel_m);
+    double t = (x - (double)v * voxel_m) / voxel_m * QRT_VOXEL_BOX_STEPS;
+    long l = (long)floor(t - 1e-6), h = (long)ceil(t + 1e-6);
+    if (l < 0)
+        l = 0;
+    if (l > QRT_VOXEL_BOX_STEPS - 1)
+        l = QRT_VOXEL_BOX_STEPS - 1;
+    if (h > QRT_VOXEL_BOX_STEPS)
+        h = QRT_VOXEL_BOX_STEPS;
+    if (h <= l)
+        h = l + 1;
+    *lo = (uint8_t)l;
+    *hi = (uint8_t)h;
 }
 
-static void store_centre(struct qrt_points *pts, long i, const long v[3])
+/* Store entry i at its box's centre in voxel v (held BOX_INSET steps
+ * inside), and grow box_radius_m to the box's half-diagonal plus that
+ * shift, so the ball round the stored position holds the box. */
+static void store_box(struct qrt_points *pts, long i, const long v[3])
 {
-    pts->x[i] = voxel_centre(v[0], pts->voxel_m);
-    pts->y[i] = voxel_centre(v[1], pts->voxel_m);
-    pts->z[i] = voxel_centre(v[2], pts->voxel_m);
+    double step = pts->voxel_m / QRT_VOXEL_BOX_STEPS, half2 = 0.0, shift2 = 0.0,
+           c[3], r;
+    int k;
+    for (k = 0; k < 3; k++) {
+        double mid = 0.5 * ((double)pts->box_lo[k][i] + pts->box_hi[k][i]);
+        double at = mid < BOX_INSET ? BOX_INSET
+                    : mid > QRT_VOXEL_BOX_STEPS - BOX_INSET
+                        ? QRT_VOXEL_BOX_STEPS - BOX_INSET
+                        : mid;
+        double half = 0.5 * (pts->box_hi[k][i] - pts->box_lo[k][i]) * step;
+        half2 += half * half;
+        shift2 += (at - mid) * step * (at - mid) * step;
+        c[k] = (double)v[k] * pts->voxel_m + at * step;
+    }
+    pts->x[i] = (float)c[0];
+    pts->y[i] = (float)c[1];
+    pts->z[i] = (float)c[2];
+    r = sqrt(half2) + sqrt(shift2);
+    if (r > pts->box_radius_m)
+        pts->box_radius_m = r;
+}
+
+/* Grow entry i's box by the box lo..hi (steps, the same voxel). */
+static void merge_box(struct qrt_points *pts, long i, const uint8_t lo[3],
+                      const uint8_t hi[3])
+{
+    int k;
+    for (k = 0; k < 3; k++) {
+        if (lo[k] < pts->box_lo[k][i])
+            pts->box_lo[k][i] = lo[k];
+        if (hi[k] > pts->box_hi[k][i])
+            pts->box_hi[k][i] = hi[k];
+    }
 }
 
 static void store_point(struct qrt_points *pts, long i, const double p[3])
@@ -68,27 +124,70 @@ static void store_point(struct qrt_points *pts, long i, const double p[3])
     pts->z[i] = (float)p[2];
 }
 
-/* Move every entry onto the centre of its voxel at edge voxel_m, merging
- * entries that share a voxel. Grids are nested (each edge doubles the
- * last, same origin), so a point's new voxel contains its old one. */
+/* Entry i's box (steps) on the grid of edge voxel_m, whose voxel v holds
+ * it: from an exact point, or from a box on the grid of half that edge
+ * (the grids are nested: each edge doubles the last, same origin, so the
+ * old voxel lies in v, at offset 0 or one old edge on each axis), rounded
+ * outwards. */
+static void box_on_grid(const struct qrt_points *pts, long i, double old_m,
+                        double voxel_m, const long v[3], uint8_t lo[3],
+                        uint8_t hi[3])
+{
+    int k;
+    const float *axis[3];
+    axis[0] = pts->x;
+    axis[1] = pts->y;
+    axis[2] = pts->z;
+    for (k = 0; k < 3; k++) {
+        long off;
+        if (old_m == 0.0) {
+            point_box(axis[k][i], v[k], voxel_m, &lo[k], &hi[k]);
+            continue;
+        }
+        off = (long)floor(axis[k][i] / old_m) - 2 * v[k]; /* 0 or 1 */
+        lo[k] = (uint8_t)((off * QRT_VOXEL_BOX_STEPS + pts->box_lo[k][i]) / 2);
+        hi[k] =
+            (uint8_t)((off * QRT_VOXEL_BOX_STEPS + pts->box_hi[k][i] + 1) / 2);
+    }
+}
+
+/* Merge every entry by voxel at edge voxel_m (from exact points, or from
+ * the boxes at half that edge), each merged entry at its box's centre.
+ * An entry is read before any write to its index: entries only move down. */
 static void requantise(struct qrt_points *pts, double voxel_m)
 {
     long i, n = pts->count;
     long s;
-    pts->voxel_m = voxel_m;
+    double old_m = pts->voxel_m;
     for (s = 0; s < QRT_POINT_HASH_SLOTS; s++)
         pts->hash[s] = 0;
     pts->count = 0;
+    pts->box_radius_m = 0.0;
     for (i = 0; i < n; i++) {
-        long v[3];
+        long v[3], e;
+        uint8_t lo[3], hi[3];
         uint32_t slot;
-        entry_voxel(pts, i, v); /* on the new grid: voxel_m is set */
-        if (find_voxel(pts, v, &slot) >= 0)
-            continue;
-        store_centre(pts, pts->count, v);
-        pts->hash[slot] = (uint32_t)(pts->count + 1);
-        pts->count++;
+        int k;
+        v[0] = voxel_coord(pts->x[i], voxel_m);
+        v[1] = voxel_coord(pts->y[i], voxel_m);
+        v[2] = voxel_coord(pts->z[i], voxel_m);
+        box_on_grid(pts, i, old_m, voxel_m, v, lo, hi);
+        pts->voxel_m = voxel_m; /* find_voxel reads the new grid */
+        e = find_voxel(pts, v, &slot);
+        if (e < 0) {
+            e = pts->count++;
+            pts->hash[slot] = (uint32_t)(e + 1);
+            for (k = 0; k < 3; k++) {
+                pts->box_lo[k][e] = lo[k];
+                pts->box_hi[k][e] = hi[k];
+            }
+        } else {
+            merge_box(pts, e, lo, hi);
+        }
+        store_box(pts, e, v);
+        pts->voxel_m = old_m; /* entries from i on are still on the old */
     }
+    pts->voxel_m = voxel_m;
 }
 
 /* Is every coordinate of p finite? x - x is 0 for a finite x and NaN for
@@ -111,7 +210,8 @@ static int all_finite(const double *xyz, long n)
 static void add_one(struct qrt_points *pts, const double p[3])
 {
     for (;;) {
-        long v[3];
+        long v[3], e;
+        uint8_t lo[3], hi[3];
         uint32_t slot;
         int k;
         if (pts->voxel_m == 0.0) {
@@ -123,14 +223,24 @@ static void add_one(struct qrt_points *pts, const double p[3])
             requantise(pts, QRT_VOXEL_BASE_M);
             continue;
         }
-        for (k = 0; k < 3; k++)
+        for (k = 0; k < 3; k++) {
             v[k] = voxel_coord(p[k], pts->voxel_m);
-        if (find_voxel(pts, v, &slot) >= 0)
+            point_box(p[k], v[k], pts->voxel_m, &lo[k], &hi[k]);
+        }
+        e = find_voxel(pts, v, &slot);
+        if (e >= 0) {
+            merge_box(pts, e, lo, hi);
+            store_box(pts, e, v);
             return;
+        }
         if (pts->count < QRT_MAX_POINTS) {
-            store_centre(pts, pts->count, v);
-            pts->hash[slot] = (uint32_t)(pts->count + 1);
-            pts->count++;
+            e = pts->count++;
+            pts->hash[slot] = (uint32_t)(e + 1);
+            for (k = 0; k < 3; k++) {
+                pts->box_lo[k][e] = lo[k];
+                pts->box_hi[k][e] = hi[k];
+            }
+            store_box(pts, e, v);
             return;
         }
         if (pts->voxel_m * 2.0 > QRT_VOXEL_MAX_M * 1.0000001) {
@@ -148,6 +258,7 @@ void qrt_points_reset(struct qrt_points *pts, double reach_m)
     pts->ignored_far = 0;
     pts->dropped = 0;
     pts->voxel_m = 0.0;
+    pts->box_radius_m = 0.0;
     pts->reach_m = reach_m;
 }
 
@@ -266,5 +377,5 @@ double qrt_points_inflation_m(const struct qrt_points *pts)
     /* float keeps 24 bits: a stored coordinate is off by at most
      * |x| * 2^-24; reach_m bounds |x|. */
     double rounding = pts->reach_m * (1.0 / 4194304.0);
-    return 0.5 * sqrt(3.0) * pts->voxel_m + rounding + 1e-9;
+    return (pts->voxel_m > 0.0 ? pts->box_radius_m : 0.0) + rounding + 1e-9;
 }

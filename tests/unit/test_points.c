@@ -241,10 +241,149 @@ static void test_capacity(void)
           "status %s", qrt_plan_status_name(plan.status));
 }
 
+/* Entries by voxel, for test_merged_shapes: (key, entry) sorted. */
+struct keyed {
+    long v[3];
+    long entry;
+};
+
+static int by_voxel(const void *a, const void *b)
+{
+    const struct keyed *p = (const struct keyed *)a,
+                       *q = (const struct keyed *)b;
+    int k;
+    for (k = 0; k < 3; k++)
+        if (p->v[k] != q->v[k])
+            return p->v[k] < q->v[k] ? -1 : 1;
+    return 0;
+}
+
+/* Every point merged into an entry lies inside the entry's box and inside
+ * the ball of the inflation round its stored position; checked for every
+ * point, not by the table's own lookup: the test finds each point's entry
+ * by voxel among the entries sorted by the voxel of their stored position.
+ * Returns the inflation over the voxel's half-diagonal (the bound the
+ * entries had as voxel centres, which it must not pass). */
+static double check_merged(const double *xyz, long n, const char *cloud)
+{
+    static struct keyed keys[QRT_MAX_POINTS];
+    long i, outside_box = 0, outside_ball = 0, lost = 0;
+    double e, step, infl, worst = 0.0;
+    qrt_points_reset(&pts, 2.0);
+    CHECK(qrt_points_add(&pts, xyz, n) == QRT_OK, "%s: add", cloud);
+    CHECK(pts.voxel_m > 0.0 && pts.dropped == 0,
+          "%s: merged, voxel %g, dropped %ld", cloud, pts.voxel_m, pts.dropped);
+    e = pts.voxel_m;
+    step = e / QRT_VOXEL_BOX_STEPS;
+    infl = qrt_points_inflation_m(&pts);
+    for (i = 0; i < pts.count; i++) {
+        double c[3];
+        int k;
+        c[0] = pts.x[i];
+        c[1] = pts.y[i];
+        c[2] = pts.z[i];
+        for (k = 0; k < 3; k++)
+            keys[i].v[k] = (long)floor(c[k] / e);
+        keys[i].entry = i;
+    }
+    qsort(keys, (size_t)pts.count, sizeof keys[0], by_voxel);
+    for (i = 0; i < n; i++) {
+        /* the point as the table took it: exact while the table was, as
+         * a float; merged, as given (the inflation holds the difference) */
+        double q[2][3], d2 = 0.0;
+        int k, form, inside = 0;
+        long j = -1;
+        for (k = 0; k < 3; k++) {
+            /* volatile: GCC 12 at -O3 dropped the rounding to float when
+             * it vectorised this loop, and the float form is the one the
+             * table kept while it was exact */
+            volatile float f = (float)xyz[3 * i + k];
+            q[0][k] = xyz[3 * i + k];
+            q[1][k] = f;
+        }
+        for (form = 0; form < 2 && !inside; form++) {
+            struct keyed want, *got;
+            for (k = 0; k < 3; k++)
+                want.v[k] = (long)floor(q[form][k] / e);
+            got = (struct keyed *)bsearch(&want, keys, (size_t)pts.count,
+                                          sizeof keys[0], by_voxel);
+            if (!got)
+                continue;
+            j = got->entry;
+            inside = 1;
+            for (k = 0; k < 3; k++) {
+                double off = q[form][k] - (double)want.v[k] * e;
+                if (off < pts.box_lo[k][j] * step - 1e-12 ||
+                    off > pts.box_hi[k][j] * step + 1e-12)
+                    inside = 0;
+            }
+        }
+        if (j < 0) {
+            lost++;
+            continue;
+        }
+        if (!inside)
+            outside_box++;
+        d2 = pow(q[0][0] - pts.x[j], 2) + pow(q[0][1] - pts.y[j], 2) +
+             pow(q[0][2] - pts.z[j], 2);
+        if (sqrt(d2) > infl)
+            outside_ball++;
+        worst = fmax(worst, sqrt(d2));
+    }
+    CHECK(lost == 0, "%s: %ld points with no entry in their voxel", cloud,
+          lost);
+    CHECK(outside_box == 0, "%s: %ld points outside their entry's box", cloud,
+          outside_box);
+    CHECK(outside_ball == 0,
+          "%s: %ld points farther than the inflation %g from their entry "
+          "(worst %g)",
+          cloud, outside_ball, infl, worst);
+    printf("%s: voxel %.3f m, %ld entries, inflation %.4f m (half-diagonal "
+           "%.4f), worst point %.4f m\n",
+           cloud, e, pts.count, infl, 0.5 * sqrt(3.0) * e, worst);
+    return (infl - 1e-6) / (0.5 * sqrt(3.0) * e);
+}
+
+/* A volume and a surface merged over several voxel sizes: every point in
+ * its entry's shape; the inflation never passes the voxel's
+ * half-diagonal, and on a plane (a scan's surface) is the box's, a face's
+ * half-diagonal (1/sqrt(2) of the edge, and the inset's shift), not the
+ * cube's. */
+static void test_merged_shapes(void)
+{
+    static double xyz[3 * (QRT_MAX_POINTS + QRT_MAX_POINTS / 2)];
+    long i, n = QRT_MAX_POINTS + QRT_MAX_POINTS / 2;
+    double ratio;
+    for (i = 0; i < n; i++) {
+        double *p = xyz + 3 * i;
+        p[0] = test_uniform(-0.6, 0.6);
+        p[1] = test_uniform(-0.6, 0.6);
+        /* half on the plane z = 0.3 + 0.1 x, half in a slab under it */
+        p[2] = i % 2 ? 0.3 + 0.1 * p[0] : test_uniform(-0.6, 0.2);
+    }
+    ratio = check_merged(xyz, n, "slab and tilted plane");
+    CHECK(ratio <= 1.0, "inflation over the half-diagonal: %g", ratio);
+    /* off the voxel grids' planes, where a box is held an inset inside */
+    for (i = 0; i < n; i++)
+        xyz[3 * i + 2] = 0.3047;
+    ratio = check_merged(xyz, n, "plane z = 0.3047");
+    CHECK(ratio < 0.9, "plane: inflation %g of the half-diagonal", ratio);
+    /* on the grids' planes: the boxes are held an inset inside their
+     * voxels, and the radius must pay for the shift */
+    for (i = 0; i < n; i++) { /* dense: boxes as wide as their voxels */
+        xyz[3 * i] *= 0.25;
+        xyz[3 * i + 1] *= 0.25;
+        xyz[3 * i + 2] = 0.3;
+    }
+    ratio = check_merged(xyz, n, "plane z = 0.3");
+    CHECK(ratio <= 1.0, "inflation over the half-diagonal: %g", ratio);
+}
+
 int main(void)
 {
     test_seed(99);
     test_exact_then_voxels();
+    test_merged_shapes();
     test_far_and_bad();
     test_each_bad_coordinate();
     test_counters_both_ways();
