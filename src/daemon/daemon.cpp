@@ -1012,17 +1012,36 @@ int Daemon::run(const RunFlags &flags)
             log(LogLevel::error, "LCM receive failed; retrying");
             std::this_thread::sleep_for(std::chrono::milliseconds(100));
         }
+    const uint64_t stop_seen_us = CanLink::now_us();
+    if (can_) {
+        // the arm stops before anything waits for a thread: a plan the
+        // planner is finishing cannot reach the drives (the master takes no
+        // path once shut down), and a thread slow to end cannot delay it
+        can_->set_host_check(nullptr);
+        can_->shutdown();
+    }
     wake_.notify_all();
     guard_wake_.notify_all();
     planner.join();
     clock.join();
     if (guard.joinable())
         guard.join();
+    const uint64_t joined_us = CanLink::now_us();
     if (can_) {
-        can_->set_host_check(nullptr); // the threads it watched have ended
-        can_->quick_stop();
+        // what the drives were last told, and when, for whoever reads why a
+        // consumer fired at a shutdown
+        const CanLinkStatus cs = can_->status();
         can_.reset(); // leaves the drives holding (docs/can-master.md)
-        log(LogLevel::info, "drives stopped");
+        auto ms_after = [stop_seen_us](uint64_t t) {
+            return t ? (double(t) - double(stop_seen_us)) * 1e-3 : 0.0;
+        };
+        log(LogLevel::info,
+            "drives stopped: quick stop written %+.0f ms after the stop was "
+            "seen, the last heartbeat at %+.0f ms, threads ended at %+.0f "
+            "ms (%lu frames unsent, %lu write retries, %lu watchdog trips)",
+            ms_after(cs.last_quick_stop_us), ms_after(cs.last_heartbeat_us),
+            ms_after(joined_us), cs.frames_unsent, cs.write_retries,
+            cs.host_watchdog_trips);
     }
     log(LogLevel::info, "shut down");
     return 0;
