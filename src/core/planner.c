@@ -335,7 +335,8 @@ static int end_joints(const struct qrt_planner *pl, const struct qrt_target *t,
     }
     all = qrt_arm_ik_branches(&pl->params.arm, t->value, ref[0], sols, found);
     /* the branches not asked for are dropped before today's order picks */
-    for (n = 0, i = 0; i < all; i++) {
+    n = 0;
+    for (i = 0; i < all; i++) {
         if (!qrt_ik_branch_allows(&t->ik, &found[i]))
             continue;
         copy_joints(sols[n], sols[i]);
@@ -546,35 +547,54 @@ static void reset_plan(const struct qrt_planner *pl, struct qrt_plan *plan)
     plan->voxel_m = pl->points.voxel_m;
 }
 
-/* end_detail's sentences for a target that asks for an IK branch, by
- * [facing][elbow] of the request; [ANY][ANY] is never read (such a target
- * has the sentences of any target). */
-#define BRANCH_SENTENCES(pre, post)                                            \
-    {                                                                          \
-        {pre post, pre " with the elbow up" post,                              \
-         pre " with the elbow down" post},                                     \
-            {pre " facing front" post,                                         \
-             pre " facing front with the elbow up" post,                       \
-             pre " facing front with the elbow down" post},                    \
-            {pre " facing back" post,                                          \
-             pre " facing back with the elbow up" post,                        \
-             pre " facing back with the elbow down" post},                     \
+/* The sentence pre BRANCH post, BRANCH naming the IK branch that *ik (a
+ * request other than {ANY, ANY}) asks for: literals only, since the core
+ * keeps no tables of pointers (tests/check_core_symbols.sh). */
+/* clang-format off */
+#define BRANCH_SENTENCE(ik, pre, post)                                         \
+    ((ik)->facing == QRT_FACING_FRONT                                          \
+         ? ((ik)->elbow == QRT_ELBOW_UP                                        \
+                ? pre " facing front with the elbow up" post                   \
+            : (ik)->elbow == QRT_ELBOW_DOWN                                    \
+                ? pre " facing front with the elbow down" post                 \
+                : pre " facing front" post)                                    \
+     : (ik)->facing == QRT_FACING_BACK                                         \
+         ? ((ik)->elbow == QRT_ELBOW_UP                                        \
+                ? pre " facing back with the elbow up" post                    \
+            : (ik)->elbow == QRT_ELBOW_DOWN                                    \
+                ? pre " facing back with the elbow down" post                  \
+                : pre " facing back" post)                                     \
+     : (ik)->elbow == QRT_ELBOW_UP ? pre " with the elbow up" post             \
+                                   : pre " with the elbow down" post)
+/* clang-format on */
+
+/* end_detail for a target that asks for an IK branch. */
+static const char *branch_detail(enum end_outcome o, int is_goal,
+                                 const struct qrt_ik_branch *ik)
+{
+    switch (o) {
+    case END_UNREACHABLE:
+        return is_goal ? BRANCH_SENTENCE(ik, "goal point has no IK solution",
+                                         " inside the arm's reach and limits")
+                       : BRANCH_SENTENCE(ik, "start point has no IK solution",
+                                         " inside the arm's reach and limits");
+    case END_COLLIDES:
+        return is_goal ? BRANCH_SENTENCE(ik, "every goal configuration",
+                                         " collides with obstacle points")
+                       : BRANCH_SENTENCE(ik, "every start configuration",
+                                         " collides with obstacle points");
+    case END_STRANDED:
+        return is_goal ? BRANCH_SENTENCE(ik, "goal",
+                                         " is free but no move to it from the "
+                                         "lattice can be proved safe")
+                       : BRANCH_SENTENCE(ik, "start",
+                                         " is free but no move from it to the "
+                                         "lattice can be proved safe");
+    case END_OK:
+        break;
     }
-/* [is_goal][outcome - END_UNREACHABLE][facing][elbow] */
-static const char *const branch_detail[2][3][3][3] = {
-    {BRANCH_SENTENCES("start point has no IK solution",
-                      " inside the arm's reach and limits"),
-     BRANCH_SENTENCES("every start configuration",
-                      " collides with obstacle points"),
-     BRANCH_SENTENCES("start", " is free but no move from it to the lattice "
-                               "can be proved safe")},
-    {BRANCH_SENTENCES("goal point has no IK solution",
-                      " inside the arm's reach and limits"),
-     BRANCH_SENTENCES("every goal configuration",
-                      " collides with obstacle points"),
-     BRANCH_SENTENCES("goal", " is free but no move to it from the lattice "
-                              "can be proved safe")}};
-#undef BRANCH_SENTENCES
+    return "";
+}
 
 /* The detail of an end that failed; for a target that asks for an IK
  * branch, the sentence names that branch. */
@@ -583,8 +603,7 @@ static const char *end_detail(enum end_outcome o, int is_goal,
 {
     if (o != END_OK && t->kind == QRT_TARGET_XYZ &&
         (t->ik.facing != QRT_FACING_ANY || t->ik.elbow != QRT_ELBOW_ANY))
-        return branch_detail[is_goal][o - END_UNREACHABLE][t->ik.facing]
-                            [t->ik.elbow];
+        return branch_detail(o, is_goal, &t->ik);
     switch (o) {
     case END_UNREACHABLE:
         return is_goal ? "goal point is outside the arm's reach or limits"
