@@ -8,6 +8,8 @@ against the schemas."""
 import json
 
 import jsonschema
+import numpy as np
+import oracle
 import pytest
 
 from conftest import ROOT, plan_scene, run_cli
@@ -47,6 +49,9 @@ def plan(scene, tmp_path, *flags):
     assert rc == 0 and err == "", err
     errors = [e.message for e in PLAN_SCHEMA.iter_errors(result)]
     assert not errors, errors
+    if result["status"] == "ok":  # safe, in the branch asked, said right
+        res = oracle.check_path(scene, result, np.array(scene["points"]))
+        assert res.safe, str(res)
     return result
 
 
@@ -181,3 +186,31 @@ def test_plan_schema_checks_the_branch(qrtplan, tmp_path):
     unreachable = plan(shelf({"facing": "back"}, arm={
         "limits_deg": [[-180, 180], [-40, 100], [-180, 140]]}), tmp_path)
     assert not PLAN_SCHEMA.is_valid(dict(unreachable, goal_ik=p["goal_ik"]))
+
+
+def test_the_oracle_measures_the_branch():
+    """tools/oracle.py tells the branch from joint positions alone, so a plan
+    in another branch than asked, or one that misreports its branch, is not
+    called safe."""
+    arm = oracle.Arm({})
+    assert oracle.ik_branch(arm, [0, 92.56, -79.85]) == ("front", "up")
+    assert oracle.ik_branch(arm, [0, -9.71, 79.85]) == ("front", "down")
+    assert oracle.ik_branch(arm, [180, 122.81, 38.66]) == ("back", "up")
+    assert oracle.ik_branch(arm, [180, 170.97, -38.66]) == ("back", "down")
+    assert oracle.ik_branch(arm, [0, 30, 0])[1] == "both"  # straight arm
+    scene = shelf({"facing": "front", "elbow": "up"},
+                  points=[[-0.5, -0.5, -0.5]])
+    up = [0, 92.55938893921252, -79.85350235235528]
+    down = [0, -9.712057689207228, 79.85350235235528]
+    good = {"status": "ok", "waypoints_deg": [[150, 60, 0], up],
+            "goal_ik": {"facing": "front", "elbow": "up"}}
+    good["cost_deg"] = oracle.path_length(arm, good["waypoints_deg"])
+    points = np.array(scene["points"])
+    assert oracle.check_path(scene, good, points).safe
+    wrong = dict(good, waypoints_deg=[[150, 60, 0], down],
+                 goal_ik={"facing": "front", "elbow": "down"})
+    wrong["cost_deg"] = oracle.path_length(arm, wrong["waypoints_deg"])
+    assert "asked up" in str(oracle.check_path(scene, wrong, points))
+    told = dict(good, goal_ik={"facing": "back", "elbow": "up"})
+    assert "plan says goal facing back" in str(
+        oracle.check_path(scene, told, points))
