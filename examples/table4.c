@@ -38,8 +38,10 @@ static void sphere(double cx, double cy, double cz, double r)
 int main(void)
 {
     struct qrt_params params;
-    struct qrt_target start = {QRT_TARGET_JOINTS, {-100, 0, 0}};
-    struct qrt_target goal = {QRT_TARGET_JOINTS, {100, 0, 0}};
+    struct qrt_target start = {
+        QRT_TARGET_JOINTS, {-100, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
+    struct qrt_target goal = {
+        QRT_TARGET_JOINTS, {100, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
     struct qrt_plan plan;
     char why[QRT_ABI_MESSAGE_LEN];
     int rc, i;

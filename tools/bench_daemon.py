@@ -3,16 +3,20 @@
 
 Starts build/bin/qrtpland on its own LCM port, sends a plan request, then
 N scans (default 1000) of the paper's 10-sphere x 1444-point scene
-(scenes/ten_spheres.json) at 20 Hz, each stamped with the wall clock when
+(scenes/ten_spheres.json, or --scene: any scene file, its points inline or
+in a PCD, e.g. a dense cell of tools/dense_scenes.py) at 20 Hz, each
+stamped with the wall clock when
 published; the daemon echoes the newest scan's stamp in every plan, and the
 plan's arrival is stamped here. Prints median, p99 and max, and writes
 build/bench/daemon_latency.csv.
 
     .venv/bin/python tools/bench_daemon.py [--scans N] [--rate HZ]
-        [--mask as-read|whole] [--mask-threads 1|2]
+        [--mask as-read|whole] [--mask-threads 1|2] [--scene FILE]
 """
 import argparse
+import collections
 import csv
+import json
 import os
 import struct
 import subprocess
@@ -26,6 +30,7 @@ sys.path[:0] = [os.path.join(REPO, "tests", "daemon"), os.path.join(REPO, "tools
 os.environ.setdefault("QRT_LCMTYPES_PY", os.path.join(REPO, "build", "lcmtypes", "python"))
 import conftest as cf  # noqa: E402
 import lcm  # noqa: E402
+import oracle  # noqa: E402
 
 
 def main():
@@ -34,9 +39,18 @@ def main():
     ap.add_argument("--rate", type=float, default=20.0)
     ap.add_argument("--mask", default="as-read", choices=["as-read", "whole"])
     ap.add_argument("--mask-threads", default="2")
+    ap.add_argument("--scene", help="scene file (default scenes/ten_spheres.json)")
     ap.add_argument("--out", default=os.path.join(REPO, "build", "bench"))
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
+    # the scene first: nothing to stop if it cannot be read
+    if args.scene:
+        scene = json.load(open(args.scene))
+        pts = oracle.scene_points(scene, os.path.dirname(args.scene))
+        what = f"{os.path.basename(args.scene)}, {len(pts)} points"
+    else:
+        scene, pts = cf.scene_points("ten_spheres.json")
+        what = "10 spheres x 1444 points"
     port = 7600 + os.getpid() % 100
     url = f"udpm://239.255.76.67:{port}?ttl=0&recv_buf_size=4194304"
     daemon = subprocess.Popen([cf.DAEMON, "--lcm-url", url, "--mask", args.mask,
@@ -50,7 +64,6 @@ def main():
         p = cf.plan_t.decode(data)
         arrived.setdefault(p.scan_utime, (time.time(), p))
     lc.subscribe("QRT_PLAN", on_plan)
-    scene, pts = cf.scene_points("ten_spheres.json")
     # encoded once; each scan only gets its stamp (bytes 8-15, after the
     # type fingerprint), so the publisher here costs what a C++ driver would
     base = bytearray(cf.scan_from_points(pts).encode())
@@ -101,11 +114,12 @@ def main():
     how = ("mask nodes asked as the plan reads them (mask + search)"
            if args.mask == "as-read" else
            f"whole mask on {args.mask_threads} thread(s)")
-    print(f"qrtpland scan-to-plan latency, 10 spheres x 1444 points, "
+    print(f"qrtpland scan-to-plan latency, {what}, "
           f"{len(sent)} scans at {args.rate:g} Hz, {how}: median "
           f"{np.median(lat):.2f} ms, p99 {np.percentile(lat, 99):.2f} ms, max "
           f"{lat.max():.2f} ms; {len(sent) - len(lat)} scans without a plan of "
-          f"their own; mask median {np.median(mask):.2f} ms ({path})")
+          f"their own; mask median {np.median(mask):.2f} ms; plans "
+          f"{dict(collections.Counter(r[2] for r in rows if r[1]))} ({path})")
     return 0
 
 

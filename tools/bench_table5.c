@@ -143,8 +143,10 @@ static void run_cell(int n, int k, int repeats, struct cell *c)
 {
     struct sphere_layout L;
     struct qrt_params prm;
-    struct qrt_target s = {QRT_TARGET_JOINTS, {0, 0, 0}};
-    struct qrt_target g = {QRT_TARGET_JOINTS, {0, 0, 0}};
+    struct qrt_target s = {
+        QRT_TARGET_JOINTS, {0, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
+    struct qrt_target g = {
+        QRT_TARGET_JOINTS, {0, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
     static struct qrt_plan plan, whole_plan;
     double *xyz, *times = malloc((size_t)repeats * sizeof *times);
     double *whole = malloc((size_t)repeats * sizeof *whole);
@@ -202,8 +204,10 @@ static void check_now_vs_mask(int repeats)
 {
     struct sphere_layout L;
     struct qrt_params prm;
-    struct qrt_target s = {QRT_TARGET_JOINTS, {0, 0, 0}};
-    struct qrt_target g = {QRT_TARGET_JOINTS, {0, 0, 0}};
+    struct qrt_target s = {
+        QRT_TARGET_JOINTS, {0, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
+    struct qrt_target g = {
+        QRT_TARGET_JOINTS, {0, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
     static struct qrt_plan plan;
     double now_ms[15], full_ms[15], *xyz;
     long count;

@@ -44,6 +44,9 @@ clang++ -std=c++17 -g -O1 -fsanitize=fuzzer,address,undefined \
     -fno-sanitize-recover=all -I"$out/lcm/cpp" -Isrc/daemon \
     -isystem /usr/include/eigen3 \
     tests/fuzz/fuzz_lcm.cpp src/daemon/ingest.cpp -o "$out/fuzz_lcm"
+# inputs that once failed, run once each before the search
+"$out/fuzz_lcm" tests/fuzz/regress_lcm/* 2>"$out/fuzz_lcm_regress.log" ||
+    { tail -40 "$out/fuzz_lcm_regress.log"; exit 1; }
 "$out/fuzz_lcm" -max_total_time="$seconds" -max_len=65536 -timeout=10 \
     -print_final_stats=1 "$out/corpus_lcm" 2>"$out/fuzz_lcm.log" ||
     { tail -40 "$out/fuzz_lcm.log"; exit 1; }

@@ -5,7 +5,9 @@ Shares no code with the planner: forward kinematics from docs/spec.md
 §Kinematics, exact point-to-segment distances in numpy, and the path sampled
 at no more than 0.1 degree per joint between waypoints (alpha the short way
 round, its step taken in (-180, 180]). A configuration collides when any
-point is closer than link_radius + margin to a link (strict <).
+point is closer than link_radius + margin to a link (strict <). An end
+given as xyz_m must be reached, in the IK branch its "ik" asks for, and a
+branch the plan reports (start_ik, goal_ik) must be the one measured.
 
     python tools/oracle.py SCENE.json PLAN.json   # exit 0 safe, 1 not
 
@@ -206,6 +208,45 @@ class Result:
         return "; ".join(self.problems)
 
 
+def ik_branch(arm, q, tol=1e-9):
+    """The IK branch of configuration q (docs/spec.md §Kinematics, Branches)
+    measured on its joint positions: (facing, elbow). Facing: the tip ahead
+    of the base axis along alpha (front) or behind it (back), both within
+    tol of the axis. Elbow: P2 above the line P1-Pe at P2's horizontal place
+    (up) or below it (down), both within tol of the line or when the line is
+    vertical."""
+    p = arm.joints(q)[0]
+    a = math.radians(q[0])
+    h = np.array([math.cos(a), math.sin(a), 0.0])
+    if math.hypot(p[3][0], p[3][1]) <= tol:
+        facing = "both"
+    else:
+        facing = "front" if float(p[3] @ h) > 0 else "back"
+    u2, z2 = float((p[2] - p[1]) @ h), float(p[2][2] - p[1][2])
+    ue, ze = float((p[3] - p[1]) @ h), float(p[3][2] - p[1][2])
+    above = z2 - ze * u2 / ue if abs(ue) > tol else 0.0
+    elbow = "both" if abs(above) <= tol else "up" if above > 0 else "down"
+    return facing, elbow
+
+
+def check_branch(arm, name, target, q_end, reported, problems):
+    """An xyz_m end: the branch its target's ik asks for, and the one the
+    plan reports (when it does), against the branch measured at q_end."""
+    measured = ik_branch(arm, q_end)
+    asked = target.get("ik", {})
+    for i, key in enumerate(("facing", "elbow")):
+        want = asked.get(key, "any")
+        if want != "any" and measured[i] not in (want, "both"):
+            problems.append(f"path {name} {q_end} is {key} {measured[i]}, "
+                            f"asked {want}")
+        if reported is None:
+            continue  # a plan that does not say (plan_t's own numbers)
+        told = reported.get(key)
+        if measured[i] != "both" and told != measured[i]:
+            problems.append(f"plan says {name} {key} {told}, measured "
+                            f"{measured[i]}")
+
+
 def check_path(scene, plan, points):
     """Check an ok plan against its scene. Returns a Result."""
     arm = Arm(scene)
@@ -256,6 +297,8 @@ def check_path(scene, plan, points):
             tip = arm.joints(q_end)[0, 3]
             if not np.linalg.norm(tip - np.asarray(target["xyz_m"], float)) <= 1e-6:
                 res.problems.append(f"path {name} tip {tip.tolist()} misses {target}")
+            check_branch(arm, name, target, q_end, plan.get(f"{name}_ik"),
+                         res.problems)
     cost = path_length(arm, wps)
     cost_deg = plan.get("cost_deg", -1.0)
     if not (isinstance(cost_deg, numbers.Real) and abs(cost - cost_deg) <= 1e-4):

@@ -2,10 +2,12 @@
 """Send qrtpland a plan request signed with an operator key.
 
   qrtsend.py --key keys/operator.key --joints 30 40 -20 [--wait 5]
-  qrtsend.py --key keys/operator.key --xyz 0.4 0.2 0.3
+  qrtsend.py --key keys/operator.key --xyz 0.4 0.2 0.3 [--facing front] [--elbow up]
 
 The goal is joints in degrees (alpha, sigma, eta) or an end-effector point
-in metres; without --start the daemon starts from the measured joints.
+in metres, for which --facing and --elbow ask for an IK branch (docs/spec.md
+section Kinematics, Branches; default any); without --start the daemon
+starts from the measured joints.
 With --wait SECONDS it prints the plan's status (exit 0 for ok, 1 else).
 """
 import argparse
@@ -21,6 +23,12 @@ from qrtplan import plan_request_t, plan_t  # noqa: E402
 
 import qrtauth  # noqa: E402
 
+# the request's values of plan_request_t's IK_* constants
+FACING = {"any": plan_request_t.IK_ANY, "front": plan_request_t.IK_FACING_FRONT,
+          "back": plan_request_t.IK_FACING_BACK}
+ELBOW = {"any": plan_request_t.IK_ANY, "up": plan_request_t.IK_ELBOW_UP,
+         "down": plan_request_t.IK_ELBOW_DOWN}
+
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -29,6 +37,10 @@ def main():
     goal.add_argument("--joints", nargs=3, type=float, metavar="DEG")
     goal.add_argument("--xyz", nargs=3, type=float, metavar="M")
     ap.add_argument("--start", nargs=3, type=float, metavar="DEG")
+    ap.add_argument("--facing", choices=FACING, default="any",
+                    help="with --xyz: the IK branch's facing")
+    ap.add_argument("--elbow", choices=ELBOW, default="any",
+                    help="with --xyz: the IK branch's elbow")
     ap.add_argument("--request-id", type=int, default=None,
                     help="echoed in the plans (default: the time in ms)")
     ap.add_argument("--lcm-url", default="udpm://239.255.76.67:7667?ttl=0")
@@ -36,6 +48,8 @@ def main():
     ap.add_argument("--plan-channel", default="QRT_PLAN")
     ap.add_argument("--wait", type=float, default=0.0, metavar="SECONDS")
     a = ap.parse_args()
+    if a.joints and (a.facing != "any" or a.elbow != "any"):
+        ap.error("--facing and --elbow apply to --xyz goals only")
     try:
         signer = qrtauth.Signer(a.key)
     except (OSError, qrtauth.KeyFileError) as e:
@@ -47,6 +61,8 @@ def main():
     r.goal = list(a.xyz or a.joints)
     r.has_start = a.start is not None
     r.start_deg = list(a.start) if a.start else [0.0, 0.0, 0.0]
+    r.ik_facing = FACING[a.facing]
+    r.ik_elbow = ELBOW[a.elbow]
     lc = lcm.LCM(a.lcm_url)
     got = []
     if a.wait > 0:

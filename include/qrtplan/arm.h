@@ -52,6 +52,54 @@ void qrt_arm_fk(const struct qrt_arm *arm, const double joints_deg[3],
 int qrt_arm_ik(const struct qrt_arm *arm, const double xyz_m[3],
                double alpha_hint_deg, double sol_deg[4][3]);
 
+/* IK branches (docs/spec.md section Kinematics, Branches). Facing: front
+ * when alpha points at the target, (x, y) . (cos alpha, sin alpha) > 0;
+ * back when it points away, < 0. Elbow, in the arm's vertical plane with u
+ * the end effector's horizontal offset from the shoulder P1 along alpha:
+ * up when the elbow P2 lies above (on the +z side of) the line P1-Pe,
+ * which is u sin(eta) < 0; down when u sin(eta) > 0. A solution for which
+ * the product is zero (a straight or folded arm, or the end effector
+ * straight above or below the shoulder), or whose point is on the base axis
+ * (rho = 0, facing), is both. As a request, a field is ANY, or one side
+ * (FRONT/BACK, UP/DOWN); as the branch of a solution, one side or BOTH
+ * (FRONT | BACK, UP | DOWN), never ANY. The values are those of the daemon's
+ * plan_request_t and plan_t. */
+enum qrt_ik_facing {
+    QRT_FACING_ANY = 0,
+    QRT_FACING_FRONT = 1,
+    QRT_FACING_BACK = 2,
+    QRT_FACING_BOTH = 3
+};
+enum qrt_ik_elbow {
+    QRT_ELBOW_ANY = 0,
+    QRT_ELBOW_UP = 1,
+    QRT_ELBOW_DOWN = 2,
+    QRT_ELBOW_BOTH = 3
+};
+struct qrt_ik_branch {
+    enum qrt_ik_facing facing;
+    enum qrt_ik_elbow elbow;
+};
+
+/* qrt_arm_ik, with the branch of each solution in branch_of[i]. */
+int qrt_arm_ik_branches(const struct qrt_arm *arm, const double xyz_m[3],
+                        double alpha_hint_deg, double sol_deg[4][3],
+                        struct qrt_ik_branch branch_of[4]);
+
+/* QRT_OK when *request is a request (each field ANY or one side), else
+ * QRT_E_INVALID (BOTH, or a value outside the enums). */
+int qrt_ik_branch_check(const struct qrt_ik_branch *request);
+
+/* True when a solution of branch *solution may be used for *request: each
+ * field of the request is ANY or shared with the solution's. */
+int qrt_ik_branch_allows(const struct qrt_ik_branch *request,
+                         const struct qrt_ik_branch *solution);
+
+/* "any", "front", "back", "both" / "any", "up", "down", "both": the names
+ * of scene and plan files; "unknown" outside the enums. */
+const char *qrt_ik_facing_name(enum qrt_ik_facing facing);
+const char *qrt_ik_elbow_name(enum qrt_ik_elbow elbow);
+
 /* Joint-space distance in degrees (Euclidean, alpha the short way round when
  * it wraps), the metric of plan costs. */
 double qrt_arm_joint_distance(const struct qrt_arm *arm, const double a_deg[3],

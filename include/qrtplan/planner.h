@@ -80,9 +80,15 @@ extern "C" {
 
 enum qrt_target_kind { QRT_TARGET_JOINTS = 0, QRT_TARGET_XYZ = 1 };
 
+/* Set every field: ik {QRT_FACING_ANY, QRT_ELBOW_ANY} (zeros) allows every
+ * IK branch, and an xyz target's request outside the enums is refused. */
 struct qrt_target {
     enum qrt_target_kind kind;
     double value[3]; /* joints in degrees, or an end-effector point in metres */
+    /* QRT_TARGET_XYZ only (ignored for joints): the IK branches it may take
+     * (qrtplan/arm.h, qrt_ik_branch_check); among those, the usual order
+     * (docs/spec.md section Planning) picks */
+    struct qrt_ik_branch ik;
 };
 
 struct qrt_plan {
@@ -95,6 +101,9 @@ struct qrt_plan {
                                 the start and goal connections */
     double start_deg[3];     /* the start and goal as joints (after IK) */
     double goal_deg[3];
+    /* the IK branch of start_deg and goal_deg for an xyz target (a side or
+     * BOTH), {ANY, ANY} for a joints target or when unreachable */
+    struct qrt_ik_branch start_ik, goal_ik;
     long start_node, goal_node; /* lattice nodes the path enters and leaves */
     long lattice_path_nodes;
     long nodes_expanded;
@@ -158,11 +167,12 @@ const struct qrt_mask *qrt_planner_mask(const struct qrt_planner *pl);
 
 /* Plan from start to goal on the whole mask (paper blocks g-h). With
  * shortcuts on (params.simplify), every plan first tries the straight
- * motion between the ends' first joints (the target's, or its IK branch
- * nearest the other end) against the points themselves, in one pass over
- * them; when that proves it free, it is the plan. Returns QRT_OK with the
- * outcome in plan->status, or QRT_E_LIMITS when joints are outside the
- * limits, QRT_E_INVALID for NaN/Inf or a mask that is not whole. */
+ * motion between the ends' first joints (the target's, or its allowed IK
+ * solution nearest the other end) against the points themselves, in one
+ * pass over them; when that proves it free, it is the plan. Returns QRT_OK
+ * with the outcome in plan->status, or QRT_E_LIMITS when joints are
+ * outside the limits, QRT_E_INVALID for NaN/Inf, an xyz target's ik that
+ * is not a request, or a mask that is not whole. */
 int qrt_planner_plan(struct qrt_planner *pl, const struct qrt_target *start,
                      const struct qrt_target *goal, struct qrt_plan *plan);
 
@@ -254,6 +264,7 @@ struct qrt_abi {
      * compiler or ABI option (packing, -fshort-enums) */
     long planner_bytes; /* sizeof(struct qrt_planner) */
     long plan_bytes;    /* sizeof(struct qrt_plan) */
+    long target_bytes;  /* sizeof(struct qrt_target) */
     long enum_bytes;    /* sizeof(enum qrt_plan_status) */
 };
 
@@ -270,6 +281,7 @@ static inline struct qrt_abi qrt_abi_here(void)
     abi.lazy_index_after = (long)QRT_LAZY_INDEX_AFTER;
     abi.planner_bytes = (long)sizeof(struct qrt_planner);
     abi.plan_bytes = (long)sizeof(struct qrt_plan);
+    abi.target_bytes = (long)sizeof(struct qrt_target);
     abi.enum_bytes = (long)sizeof(enum qrt_plan_status);
     return abi;
 }

@@ -18,8 +18,10 @@ extern uint32_t __stack_bottom__, __stack_top__;
 int main(void)
 {
     struct qrt_params prm;
-    struct qrt_target s = {QRT_TARGET_JOINTS, {0, 0, 0}};
-    struct qrt_target g = {QRT_TARGET_JOINTS, {0, 0, 0}};
+    struct qrt_target s = {
+        QRT_TARGET_JOINTS, {0, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
+    struct qrt_target g = {
+        QRT_TARGET_JOINTS, {0, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
     int i, rc;
     qrt_params_default(&prm);
     prm.grid_deg = SCENE_GRID_DEG;

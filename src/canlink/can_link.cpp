@@ -171,13 +171,7 @@ CanLink::CanLink(std::string iface, const qrtcan_master_config &cfg)
 CanLink::~CanLink()
 {
     if (thread_.joinable()) {
-        {
-            std::lock_guard<std::mutex> lock(mu_);
-            uint64_t now = now_us();
-            discard_pending(pending_.size());
-            qrtcan_master_shutdown(&master_, now);
-            flush(now);
-        }
+        shutdown();
         stop_ = true;
         thread_.join();
         // the thread no longer retries what the transmit queue refused
@@ -292,6 +286,8 @@ void CanLink::flush(uint64_t now)
             if (q.id >= 0x200 && q.id < 0x280 && q.dlc >= 2 &&
                 (q.data[0] | (q.data[1] << 8)) == QRTCAN_CW_CMD_QUICK_STOP)
                 last_quick_stop_us_ = now_us();
+            if (q.id == QRTCAN_FN_HEARTBEAT + cfg_.master_node)
+                last_heartbeat_us_ = now_us();
             continue;
         }
         if (errno == EAGAIN || errno == ENOBUFS || errno == EINTR) {
@@ -433,6 +429,15 @@ void CanLink::quick_stop()
     flush(now);
 }
 
+void CanLink::shutdown()
+{
+    std::lock_guard<std::mutex> lock(mu_);
+    uint64_t now = now_us();
+    discard_pending(pending_.size()); // set-points must not follow the stop
+    qrtcan_master_shutdown(&master_, now);
+    flush(now);
+}
+
 CanLinkStatus CanLink::status() const
 {
     std::lock_guard<std::mutex> lock(mu_);
@@ -444,6 +449,7 @@ CanLinkStatus CanLink::status() const
     s.frames_written = frames_written_;
     s.frames_unsent = frames_unsent_;
     s.last_quick_stop_us = last_quick_stop_us_;
+    s.last_heartbeat_us = last_heartbeat_us_;
     for (int i = 0; i < master_.n_waypoints; i++)
         s.path.push_back({master_.path_deg[i][0], master_.path_deg[i][1],
                           master_.path_deg[i][2]});

@@ -41,6 +41,7 @@ struct CanLinkStatus {
     // error, or beyond the queue's room while the bus refused them
     unsigned long frames_unsent = 0;
     uint64_t last_quick_stop_us = 0; // CLOCK_MONOTONIC when written
+    uint64_t last_heartbeat_us = 0;  // the master's own, likewise
     // the path the master is executing, waypoints in degrees: empty when
     // it has none (at rest, stopped, ramping down, faulted)
     std::vector<std::array<double, 3>> path;
@@ -97,7 +98,7 @@ class CanLink
 {
   public:
     CanLink(std::string iface, const qrtcan_master_config &cfg);
-    ~CanLink(); // quick stop, disable the drives, stop the thread
+    ~CanLink(); // shutdown(), then the thread ends
     CanLink(const CanLink &) = delete;
     CanLink &operator=(const CanLink &) = delete;
 
@@ -112,6 +113,14 @@ class CanLink
     // Stop now; the quick-stop frames are written before this returns
     // (unless the bus is down).
     void quick_stop();
+
+    // Quick stop to every drive, held there for good: the master takes no
+    // more paths and sends no more heartbeat (qrtcan_master_shutdown), so
+    // the drives' consumers keep them stopped if this process then hangs.
+    // What a stopping process does first, before it waits for its other
+    // threads; the link's thread runs on until the destructor, which sends
+    // the stops once more.
+    void shutdown();
 
     CanLinkStatus status() const;
 
@@ -144,7 +153,7 @@ class CanLink
     uint64_t next_open_us_ = 0;
     unsigned long bus_errors_ = 0, write_retries_ = 0;
     unsigned long frames_written_ = 0, frames_unsent_ = 0;
-    uint64_t last_quick_stop_us_ = 0;
+    uint64_t last_quick_stop_us_ = 0, last_heartbeat_us_ = 0;
     HostCheck host_check_;
     bool host_alive_ = true;
     unsigned long host_watchdog_trips_ = 0;

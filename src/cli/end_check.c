@@ -34,9 +34,20 @@ void end_check_begin(struct end_check *c, const struct qrt_planner *pl,
         for (k = 0; k < 3; k++)
             c->q[0][k] = t->value[k];
     } else {
-        /* the branch the plan reports is among them: its alpha is the
-         * hint for a point on the base axis */
-        c->n = qrt_arm_ik(arm, t->value, reported[0], c->q);
+        /* only the solutions of the branch the target asks for, as the
+         * core tries them; the one the plan reports is among them, and
+         * its alpha is the hint for a point on the base axis */
+        double sols[4][3];
+        struct qrt_ik_branch found[4];
+        int all = qrt_arm_ik_branches(arm, t->value, reported[0], sols, found);
+        c->n = 0;
+        for (i = 0; i < all; i++) {
+            if (!qrt_ik_branch_allows(&t->ik, &found[i]))
+                continue;
+            for (k = 0; k < 3; k++)
+                c->q[c->n][k] = sols[i][k];
+            c->n++;
+        }
     }
     for (i = 0; i < 4; i++)
         c->clear_m[i] = 1e30;
@@ -62,25 +73,43 @@ double end_check_clearance(const struct end_check *c)
     return best;
 }
 
-void end_check_detail(const struct qrt_plan *plan, double cspace_margin_deg,
-                      char *buf, size_t len)
+/* " facing front with the elbow up" and the like, as the core's details
+ * name a requested branch; "" for a request of any branch */
+static void branch_phrase(const struct qrt_ik_branch *ik, char *buf, size_t len)
+{
+    const char *facing =
+        ik->facing == QRT_FACING_ANY ? "" : qrt_ik_facing_name(ik->facing);
+    snprintf(buf, len, "%s%s%s%s", *facing ? " facing " : "", facing,
+             ik->elbow == QRT_ELBOW_ANY ? "" : " with the elbow ",
+             ik->elbow == QRT_ELBOW_ANY ? "" : qrt_ik_elbow_name(ik->elbow));
+}
+
+void end_check_detail(const struct qrt_plan *plan, const struct qrt_target *t,
+                      double cspace_margin_deg, char *buf, size_t len)
 {
     const char *end =
         plan->status == QRT_STATUS_GOAL_BLOCKED ? "goal" : "start";
     double mm = 1000.0 * plan->end_clearance_m;
-    if (plan->end_clearance_m <= 0.0)
+    char branch[48] = "";
+    if (t->kind == QRT_TARGET_XYZ)
+        branch_phrase(&t->ik, branch, sizeof branch);
+    if (plan->end_clearance_m <= 0.0 && branch[0])
+        snprintf(buf, len,
+                 "every %s configuration%s collides with obstacle points", end,
+                 branch);
+    else if (plan->end_clearance_m <= 0.0)
         snprintf(buf, len, "%s configuration collides with obstacle points",
                  end);
     else if (plan->voxel_m > 0.0)
         snprintf(buf, len,
-                 "%s is clear of the points by %.1f mm beyond the margin, "
+                 "%s%s is clear of the points by %.1f mm beyond the margin, "
                  "but cannot be proved free under point merging (voxel "
                  "%.0f mm)",
-                 end, mm, 1000.0 * plan->voxel_m);
+                 end, branch, mm, 1000.0 * plan->voxel_m);
     else
         snprintf(buf, len,
-                 "%s is clear of the points by %.1f mm beyond the margin, "
+                 "%s%s is clear of the points by %.1f mm beyond the margin, "
                  "but cannot be proved free within the C-space margin "
                  "(%g deg) and the points' float rounding",
-                 end, mm, cspace_margin_deg);
+                 end, branch, mm, cspace_margin_deg);
 }

@@ -15,7 +15,7 @@ extern "C" {
 #endif
 
 /* Room for end_check_detail's longest sentence. */
-#define END_CHECK_DETAIL_LEN 192
+#define END_CHECK_DETAIL_LEN 256
 
 struct end_check {
     const struct qrt_planner *pl;
@@ -34,7 +34,8 @@ int end_check_needed(const struct qrt_plan *plan);
 int end_check_measured(const struct qrt_plan *plan);
 
 /* Start measuring the blocked end of plan: the configurations of start or
- * goal (every IK branch within arm's limits of an xyz target). */
+ * goal (of an xyz target, every IK solution within the arm's limits of the
+ * branch the target asks for). */
 void end_check_begin(struct end_check *c, const struct qrt_planner *pl,
                      const struct qrt_arm *arm, const struct qrt_plan *plan,
                      const struct qrt_target *start,
@@ -50,9 +51,11 @@ double end_check_clearance(const struct end_check *c);
 /* The detail of a blocked plan whose end was measured (plan->end_measured
  * 1, plan->end_clearance_m the clearance): "collides" only where that is
  * <= 0; else how clear it is, and what kept it from being proved free
- * (the voxel edge under merging, the C-space margin otherwise). */
-void end_check_detail(const struct qrt_plan *plan, double cspace_margin_deg,
-                      char *buf, size_t len);
+ * (the voxel edge under merging, the C-space margin otherwise). t is the
+ * blocked end's target: the IK branch it asks for is named, as the core's
+ * details name it. */
+void end_check_detail(const struct qrt_plan *plan, const struct qrt_target *t,
+                      double cspace_margin_deg, char *buf, size_t len);
 
 #ifdef __cplusplus
 }

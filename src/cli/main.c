@@ -68,8 +68,10 @@ static const char plan_help[] =
     "                    [--whole-mask] [--max-memory BYTES]\n"
     "\n"
     "Read a scene (arm, margins, grid_deg, points and/or a PCD points_file,\n"
-    "start and goal as joints_deg or xyz_m) and plan, finding only the\n"
-    "C-space mask nodes the plan reads, as it reads them\n"
+    "start and goal as joints_deg or xyz_m, the latter optionally with\n"
+    "the IK branch to take, e.g. \"ik\": {\"facing\": \"front\",\n"
+    "\"elbow\": \"up\"}) and plan, finding only the C-space mask nodes the\n"
+    "plan reads, as it reads them\n"
     "(qrt_planner_plan_now): stats then say cells_blocked -1 and put the\n"
     "whole time under search. Writes the plan as JSON to PLAN.json or\n"
     "standard output. SCENE.json '-' reads standard input (its points_file\n"
@@ -341,7 +343,9 @@ static void measure_blocked_end(const char *path, const struct scene *sc,
     }
     if (!end_check_measured(plan))
         return;
-    end_check_detail(plan, sc->params.cspace_margin_deg, detail, len);
+    end_check_detail(
+        plan, plan->status == QRT_STATUS_GOAL_BLOCKED ? &sc->goal : &sc->start,
+        sc->params.cspace_margin_deg, detail, len);
     plan->detail = detail;
 }
 

@@ -30,6 +30,18 @@ static void write_joints(FILE *out, const double q[3])
     fputc(']', out);
 }
 
+/* The IK branch an xyz start or goal took, as "key": {...}; nothing for a
+ * joints target (its branch is {ANY, ANY}). */
+static void write_ik(FILE *out, const char *key,
+                     const struct qrt_ik_branch *branch)
+{
+    if (branch->facing == QRT_FACING_ANY && branch->elbow == QRT_ELBOW_ANY)
+        return;
+    fprintf(out, "  \"%s\": {\"facing\": \"%s\", \"elbow\": \"%s\"},\n", key,
+            qrt_ik_facing_name(branch->facing),
+            qrt_ik_elbow_name(branch->elbow));
+}
+
 void plan_write_json(FILE *out, const struct qrt_plan *plan,
                      const struct stage_times *t)
 {
@@ -57,10 +69,12 @@ void plan_write_json(FILE *out, const struct qrt_plan *plan,
         fprintf(out, "  \"start_deg\": ");
         write_joints(out, plan->start_deg);
         fprintf(out, ",\n");
+        write_ik(out, "start_ik", &plan->start_ik);
         if (plan->status != QRT_STATUS_START_BLOCKED) {
             fprintf(out, "  \"goal_deg\": ");
             write_joints(out, plan->goal_deg);
             fprintf(out, ",\n");
+            write_ik(out, "goal_ik", &plan->goal_ik);
         }
     }
     if (end_check_measured(plan))

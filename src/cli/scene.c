@@ -239,11 +239,74 @@ static int parse_arm(const struct json *arm, struct qrt_arm *out, char *err,
     return 0;
 }
 
+/* One field of a target's "ik": a string naming a request, "any" or one
+ * side (the core's names: qrt_ik_facing_name, qrt_ik_elbow_name, values
+ * 0..2); absent keeps "any". */
+static int parse_ik_side(const struct json *ik, const char *what,
+                         const char *key, const char *(*name_of)(int), int *out,
+                         char *err, size_t err_len)
+{
+    const struct json *v = json_get(ik, key);
+    int value;
+    if (!v)
+        return 0;
+    if (v->type == JSON_STRING)
+        for (value = 0; value <= 2; value++)
+            if (strcmp(v->string, name_of(value)) == 0) {
+                *out = value;
+                return 0;
+            }
+    if (v->type == JSON_STRING)
+        snprintf(err, err_len,
+                 "%s.%s is \"%.64s\"; valid: \"%s\", \"%s\", \"%s\"", what, key,
+                 v->string, name_of(0), name_of(1), name_of(2));
+    else
+        snprintf(err, err_len,
+                 "%s.%s must be a string, not %s (valid: \"%s\", \"%s\", "
+                 "\"%s\")",
+                 what, key, json_type_name(v->type), name_of(0), name_of(1),
+                 name_of(2));
+    return -1;
+}
+
+static const char *facing_name(int value)
+{
+    return qrt_ik_facing_name((enum qrt_ik_facing)value);
+}
+
+static const char *elbow_name(int value)
+{
+    return qrt_ik_elbow_name((enum qrt_ik_elbow)value);
+}
+
+/* A target's "ik": the IK branches an xyz_m target may take. */
+static int parse_ik(const struct json *ik, const char *key,
+                    struct qrt_ik_branch *out, char *err, size_t err_len)
+{
+    static const char *const keys[] = {"facing", "elbow", NULL};
+    char what[32];
+    int facing = QRT_FACING_ANY, elbow = QRT_ELBOW_ANY;
+    snprintf(what, sizeof what, "%s.ik", key);
+    if (ik->type != JSON_OBJECT) {
+        snprintf(err, err_len,
+                 "%s must be an object with facing and/or elbow, not %s", what,
+                 json_type_name(ik->type));
+        return -1;
+    }
+    if (only_keys(ik, what, keys, err, err_len) ||
+        parse_ik_side(ik, what, "facing", facing_name, &facing, err, err_len) ||
+        parse_ik_side(ik, what, "elbow", elbow_name, &elbow, err, err_len))
+        return -1;
+    out->facing = (enum qrt_ik_facing)facing;
+    out->elbow = (enum qrt_ik_elbow)elbow;
+    return 0;
+}
+
 static int parse_target(const struct json *root, const char *key,
                         const struct qrt_arm *arm, struct qrt_target *t,
                         char *err, size_t err_len)
 {
-    static const char *const keys[] = {"joints_deg", "xyz_m", NULL};
+    static const char *const keys[] = {"joints_deg", "xyz_m", "ik", NULL};
     const struct json *v = json_get(root, key), *j, *x;
     char what[32];
     if (!v) {
@@ -265,6 +328,19 @@ static int parse_target(const struct json *root, const char *key,
         snprintf(err, err_len, "%s needs exactly one of joints_deg or xyz_m",
                  key);
         return -1;
+    }
+    t->ik.facing = QRT_FACING_ANY;
+    t->ik.elbow = QRT_ELBOW_ANY;
+    if ((v = json_get(v, "ik")) != NULL) {
+        if (j) {
+            snprintf(err, err_len,
+                     "%s.ik applies only to xyz_m (joints_deg names one "
+                     "configuration)",
+                     key);
+            return -1;
+        }
+        if (parse_ik(v, key, &t->ik, err, err_len))
+            return -1;
     }
     snprintf(what, sizeof what, "%s.%s", key, j ? "joints_deg" : "xyz_m");
     t->kind = j ? QRT_TARGET_JOINTS : QRT_TARGET_XYZ;

@@ -95,6 +95,8 @@ int qrt_abi_check(const struct qrt_abi *caller, char *msg, size_t msg_len)
     compare(&t, "sizeof(struct qrt_planner)", caller->planner_bytes,
             lib.planner_bytes);
     compare(&t, "sizeof(struct qrt_plan)", caller->plan_bytes, lib.plan_bytes);
+    compare(&t, "sizeof(struct qrt_target)", caller->target_bytes,
+            lib.target_bytes);
     compare(&t, "sizeof(enum qrt_plan_status)", caller->enum_bytes,
             lib.enum_bytes);
     if (t.differences > 0) {

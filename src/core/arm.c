@@ -79,8 +79,11 @@ void qrt_arm_fk(const struct qrt_arm *arm, const double joints_deg[3],
 }
 
 /* Planar two-link IK for the point (u, z) seen from the shoulder; writes up
- * to two (sigma, eta) pairs in degrees. */
-static int ik_planar(double l2, double l3, double u, double z, double out[2][2])
+ * to two (sigma, eta) pairs in degrees, and the sign of each eta in
+ * eta_sign (+1, -1, or 0 for a straight or folded arm, where both branches
+ * coincide and one pair is written). */
+static int ik_planar(double l2, double l3, double u, double z, double out[2][2],
+                     int eta_sign[2])
 {
     double d2 = u * u + z * z;
     double c = (d2 - l2 * l2 - l3 * l3) / (2.0 * l2 * l3);
@@ -97,15 +100,31 @@ static int ik_planar(double l2, double l3, double u, double z, double out[2][2])
         sigma = atan2(z, u) - atan2(l3 * sin(eta), l2 + l3 * cos(eta));
         out[n][0] = qrt_wrap_rad(sigma) / QRT_DEG;
         out[n][1] = qrt_wrap_rad(eta) / QRT_DEG;
+        eta_sign[n] = k == 0 ? 1 : -1;
         n++;
-        if (c == 1.0 || c == -1.0)
-            break; /* both branches coincide */
+        if (c == 1.0 || c == -1.0) {
+            eta_sign[0] = 0; /* sin(eta) = 0: P2 on the line P1-Pe */
+            break;           /* both branches coincide */
+        }
     }
     return n;
 }
 
-int qrt_arm_ik(const struct qrt_arm *arm, const double xyz_m[3],
-               double alpha_hint_deg, double sol_deg[4][3])
+/* The elbow of a planar solution: above the line P1-Pe exactly when
+ * u sin(eta) < 0 (the cross product of P1->Pe and P1->P2 is
+ * -L2 L3 sin(eta), and "above" is its side to the left of P1->Pe where Pe
+ * lies ahead of the shoulder, u > 0, and to the right where it lies
+ * behind). */
+static enum qrt_ik_elbow elbow_of(double u, int eta_sign)
+{
+    if (u == 0.0 || eta_sign == 0)
+        return QRT_ELBOW_BOTH;
+    return (u > 0.0) == (eta_sign < 0) ? QRT_ELBOW_UP : QRT_ELBOW_DOWN;
+}
+
+int qrt_arm_ik_branches(const struct qrt_arm *arm, const double xyz_m[3],
+                        double alpha_hint_deg, double sol_deg[4][3],
+                        struct qrt_ik_branch branch_of[4])
 {
     double rho = hypot(xyz_m[0], xyz_m[1]);
     double phi =
@@ -116,7 +135,9 @@ int qrt_arm_ik(const struct qrt_arm *arm, const double xyz_m[3],
         double alpha = qrt_wrap_deg(phi + (side ? 180.0 : 0.0));
         double u = (side ? -rho : rho) - arm->link_m[0];
         double pl[2][2];
-        int k, m = ik_planar(arm->link_m[1], arm->link_m[2], u, xyz_m[2], pl);
+        int eta_sign[2];
+        int k, m = ik_planar(arm->link_m[1], arm->link_m[2], u, xyz_m[2], pl,
+                             eta_sign);
         for (k = 0; k < m; k++) {
             double q[3];
             q[0] = alpha;
@@ -128,6 +149,11 @@ int qrt_arm_ik(const struct qrt_arm *arm, const double xyz_m[3],
                 sol_deg[n][0] = q[0];
                 sol_deg[n][1] = q[1];
                 sol_deg[n][2] = q[2];
+                /* on the base axis every alpha faces the point alike */
+                branch_of[n].facing = rho == 0.0 ? QRT_FACING_BOTH
+                                      : side     ? QRT_FACING_BACK
+                                                 : QRT_FACING_FRONT;
+                branch_of[n].elbow = elbow_of(u, eta_sign[k]);
                 n++;
             }
         }
@@ -135,6 +161,64 @@ int qrt_arm_ik(const struct qrt_arm *arm, const double xyz_m[3],
             break;
     }
     return n;
+}
+
+int qrt_arm_ik(const struct qrt_arm *arm, const double xyz_m[3],
+               double alpha_hint_deg, double sol_deg[4][3])
+{
+    struct qrt_ik_branch branch_of[4];
+    return qrt_arm_ik_branches(arm, xyz_m, alpha_hint_deg, sol_deg, branch_of);
+}
+
+int qrt_ik_branch_check(const struct qrt_ik_branch *request)
+{
+    int facing = (int)request->facing, elbow = (int)request->elbow;
+    if (facing < QRT_FACING_ANY || facing > QRT_FACING_BACK)
+        return QRT_E_INVALID;
+    if (elbow < QRT_ELBOW_ANY || elbow > QRT_ELBOW_DOWN)
+        return QRT_E_INVALID;
+    return QRT_OK;
+}
+
+int qrt_ik_branch_allows(const struct qrt_ik_branch *request,
+                         const struct qrt_ik_branch *solution)
+{
+    /* one side is a bit, BOTH both bits: a shared bit is a shared side */
+    int facing_ok = request->facing == QRT_FACING_ANY ||
+                    ((int)request->facing & (int)solution->facing) != 0;
+    int elbow_ok = request->elbow == QRT_ELBOW_ANY ||
+                   ((int)request->elbow & (int)solution->elbow) != 0;
+    return facing_ok && elbow_ok;
+}
+
+const char *qrt_ik_facing_name(enum qrt_ik_facing facing)
+{
+    switch (facing) {
+    case QRT_FACING_ANY:
+        return "any";
+    case QRT_FACING_FRONT:
+        return "front";
+    case QRT_FACING_BACK:
+        return "back";
+    case QRT_FACING_BOTH:
+        return "both";
+    }
+    return "unknown";
+}
+
+const char *qrt_ik_elbow_name(enum qrt_ik_elbow elbow)
+{
+    switch (elbow) {
+    case QRT_ELBOW_ANY:
+        return "any";
+    case QRT_ELBOW_UP:
+        return "up";
+    case QRT_ELBOW_DOWN:
+        return "down";
+    case QRT_ELBOW_BOTH:
+        return "both";
+    }
+    return "unknown";
 }
 
 double qrt_arm_joint_distance(const struct qrt_arm *arm, const double a_deg[3],

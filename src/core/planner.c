@@ -345,19 +345,33 @@ static double exact_clearance(const struct qrt_planner *pl, const double q[3])
     return qrt_clearance(&pl->params.arm, radius, &pl->points, q) - rounding;
 }
 
-/* The joints a start or goal may take, nearest to ref first: the target's
- * own for joints, every IK branch for an end-effector point. Returns how
- * many (0: out of reach). */
+/* The joints a start or goal may take, nearest to ref first, with the IK
+ * branch of each in branch_of: the target's own for joints ({ANY, ANY}),
+ * for an end-effector point every IK solution of a branch the target
+ * allows. Returns how many (0: none inside the reach, limits and branch). */
 static int end_joints(const struct qrt_planner *pl, const struct qrt_target *t,
-                      const double ref[3], double out[4][3])
+                      const double ref[3], double out[4][3],
+                      struct qrt_ik_branch branch_of[4])
 {
     double sols[4][3], dist[4];
-    int order[4] = {0, 1, 2, 3}, n, i;
+    struct qrt_ik_branch found[4];
+    int order[4] = {0, 1, 2, 3}, n, all, i;
     if (t->kind == QRT_TARGET_JOINTS) {
         copy_joints(out[0], t->value);
+        branch_of[0].facing = QRT_FACING_ANY;
+        branch_of[0].elbow = QRT_ELBOW_ANY;
         return 1;
     }
-    n = qrt_arm_ik(&pl->params.arm, t->value, ref[0], sols);
+    all = qrt_arm_ik_branches(&pl->params.arm, t->value, ref[0], sols, found);
+    /* the branches not asked for are dropped before today's order picks */
+    n = 0;
+    for (i = 0; i < all; i++) {
+        if (!qrt_ik_branch_allows(&t->ik, &found[i]))
+            continue;
+        copy_joints(sols[n], sols[i]);
+        found[n] = found[i];
+        n++;
+    }
     for (i = 0; i < n; i++) {
         order[i] = i;
         dist[i] = qrt_arm_joint_distance(&pl->params.arm, ref, sols[i]);
@@ -370,27 +384,30 @@ static int end_joints(const struct qrt_planner *pl, const struct qrt_target *t,
         }
         order[m] = o;
     }
-    for (i = 0; i < n; i++)
+    for (i = 0; i < n; i++) {
         copy_joints(out[i], sols[order[i]]);
+        branch_of[i] = found[order[i]];
+    }
     return n;
 }
 
-/* Turn a start or goal into joints and its lattice connections. For an
- * end-effector point every IK branch is tried, nearest to ref first. When
- * no branch is proved free and the points are exact, *clear_m is the
- * clearest branch's exact clearance and *measured 1 (else 0). */
-static enum end_outcome resolve_end(struct qrt_planner *pl,
-                                    const struct qrt_target *t,
-                                    const double ref[3], double q[3],
-                                    struct qrt_ends *ends, int *measured,
-                                    double *clear_m)
+/* Turn a start or goal into joints, the IK branch they belong to, and
+ * their lattice connections. For an end-effector point every allowed IK
+ * solution is tried, nearest to ref first. When no solution is proved free
+ * and the points are exact, *clear_m is the clearest solution's exact
+ * clearance and *measured 1 (else 0). */
+static enum end_outcome
+resolve_end(struct qrt_planner *pl, const struct qrt_target *t,
+            const double ref[3], double q[3], struct qrt_ik_branch *branch,
+            struct qrt_ends *ends, int *measured, double *clear_m)
 {
     double sols[4][3], radius[3];
+    struct qrt_ik_branch branch_of[4];
     int n, i, any_free = 0;
     *measured = 0;
     *clear_m = 0.0;
     exact_radii(pl, radius);
-    n = end_joints(pl, t, ref, sols);
+    n = end_joints(pl, t, ref, sols, branch_of);
     if (n == 0)
         return END_UNREACHABLE;
     for (i = 0; i < n; i++) {
@@ -403,10 +420,12 @@ static enum end_outcome resolve_end(struct qrt_planner *pl,
         collect_ends(pl, s, ends);
         if (ends->count > 0) {
             copy_joints(q, s);
+            *branch = branch_of[i];
             return END_OK;
         }
     }
     copy_joints(q, sols[0]);
+    *branch = branch_of[0];
     if (any_free)
         return END_STRANDED;
     if (pl->points.voxel_m > 0.0)
@@ -431,7 +450,7 @@ static int check_target(const struct qrt_arm *arm, const struct qrt_target *t)
             return QRT_E_INVALID;
     if (t->kind == QRT_TARGET_JOINTS)
         return qrt_arm_check_joints(arm, t->value);
-    return QRT_OK;
+    return qrt_ik_branch_check(&t->ik);
 }
 
 /* Both targets of a plan: QRT_OK, or the first one's error. */
@@ -559,6 +578,8 @@ static void reset_plan(const struct qrt_planner *pl, struct qrt_plan *plan)
     plan->lattice_cost_deg = 0.0;
     for (k = 0; k < 3; k++)
         plan->start_deg[k] = plan->goal_deg[k] = 0.0;
+    plan->start_ik.facing = plan->goal_ik.facing = QRT_FACING_ANY;
+    plan->start_ik.elbow = plan->goal_ik.elbow = QRT_ELBOW_ANY;
     plan->start_node = plan->goal_node = -1;
     plan->lattice_path_nodes = 0;
     plan->nodes_expanded = 0;
@@ -571,10 +592,85 @@ static void reset_plan(const struct qrt_planner *pl, struct qrt_plan *plan)
     plan->end_clearance_m = 0.0;
 }
 
-/* merged: the table holds merged points (END_UNPROVEN cannot say whether
- * the end is clear) */
-static const char *end_detail(enum end_outcome o, int is_goal, int merged)
+/* The sentence pre BRANCH post, BRANCH naming the IK branch that *ik (a
+ * request other than {ANY, ANY}) asks for: literals only, since the core
+ * keeps no tables of pointers (tests/check_core_symbols.sh). */
+/* clang-format off */
+#define BRANCH_SENTENCE(ik, pre, post)                                         \
+    ((ik)->facing == QRT_FACING_FRONT                                          \
+         ? ((ik)->elbow == QRT_ELBOW_UP                                        \
+                ? pre " facing front with the elbow up" post                   \
+            : (ik)->elbow == QRT_ELBOW_DOWN                                    \
+                ? pre " facing front with the elbow down" post                 \
+                : pre " facing front" post)                                    \
+     : (ik)->facing == QRT_FACING_BACK                                         \
+         ? ((ik)->elbow == QRT_ELBOW_UP                                        \
+                ? pre " facing back with the elbow up" post                    \
+            : (ik)->elbow == QRT_ELBOW_DOWN                                    \
+                ? pre " facing back with the elbow down" post                  \
+                : pre " facing back" post)                                     \
+     : (ik)->elbow == QRT_ELBOW_UP ? pre " with the elbow up" post             \
+                                   : pre " with the elbow down" post)
+/* clang-format on */
+
+/* end_detail for a target that asks for an IK branch; merged as there. */
+static const char *branch_detail(enum end_outcome o, int is_goal,
+                                 const struct qrt_ik_branch *ik, int merged)
 {
+    switch (o) {
+    case END_UNREACHABLE:
+        return is_goal ? BRANCH_SENTENCE(ik, "goal point has no IK solution",
+                                         " inside the arm's reach and limits")
+                       : BRANCH_SENTENCE(ik, "start point has no IK solution",
+                                         " inside the arm's reach and limits");
+    case END_COLLIDES:
+        return is_goal ? BRANCH_SENTENCE(ik, "every goal configuration",
+                                         " collides with obstacle points")
+                       : BRANCH_SENTENCE(ik, "every start configuration",
+                                         " collides with obstacle points");
+    case END_UNPROVEN:
+        if (merged)
+            return is_goal
+                       ? BRANCH_SENTENCE(ik, "goal",
+                                         " cannot be proved free under point "
+                                         "merging; only the exact points can "
+                                         "tell whether it collides")
+                       : BRANCH_SENTENCE(ik, "start",
+                                         " cannot be proved free under point "
+                                         "merging; only the exact points can "
+                                         "tell whether it collides");
+        return is_goal ? BRANCH_SENTENCE(ik, "goal",
+                                         " is clear of the points, but not by "
+                                         "the C-space margin and rounding the "
+                                         "planner adds, so cannot be proved "
+                                         "free")
+                       : BRANCH_SENTENCE(ik, "start",
+                                         " is clear of the points, but not by "
+                                         "the C-space margin and rounding the "
+                                         "planner adds, so cannot be proved "
+                                         "free");
+    case END_STRANDED:
+        return is_goal ? BRANCH_SENTENCE(ik, "goal",
+                                         " is free but no move to it from the "
+                                         "lattice can be proved safe")
+                       : BRANCH_SENTENCE(ik, "start",
+                                         " is free but no move from it to the "
+                                         "lattice can be proved safe");
+    case END_OK:
+        break;
+    }
+    return "";
+}
+
+/* The detail of an end that failed; for a target that asks for an IK
+ * branch, the sentence names that branch. merged: the table holds merged
+ * points (END_UNPROVEN cannot say whether the end is clear). */
+static const char *end_detail(enum end_outcome o, int is_goal,
+                              const struct qrt_target *t, int merged)
+{
+    if (o != END_OK && t->kind == QRT_TARGET_XYZ &&
+        (t->ik.facing != QRT_FACING_ANY || t->ik.elbow != QRT_ELBOW_ANY))
+        return branch_detail(o, is_goal, &t->ik, merged);
     switch (o) {
     case END_UNREACHABLE:
         return is_goal ? "goal point is outside the arm's reach or limits"
@@ -625,12 +721,13 @@ static int plan_swept(struct qrt_planner *pl, const struct qrt_target *start,
 {
     static const double origin[3] = {0.0, 0.0, 0.0};
     double qs[4][3], qg[4][3], radius[3];
+    struct qrt_ik_branch bs[4], bg[4];
     if (!pl->params.simplify || pl->points.dropped > 0)
         return 0;
     if (end_joints(pl, start,
-                   goal->kind == QRT_TARGET_JOINTS ? goal->value : origin,
-                   qs) == 0 ||
-        end_joints(pl, goal, qs[0], qg) == 0)
+                   goal->kind == QRT_TARGET_JOINTS ? goal->value : origin, qs,
+                   bs) == 0 ||
+        end_joints(pl, goal, qs[0], qg, bg) == 0)
         return 0;
     exact_radii(pl, radius);
     if (!qrt_sweep_free(&pl->params.arm, radius, &pl->points, &pl->mask.lat,
@@ -639,6 +736,8 @@ static int plan_swept(struct qrt_planner *pl, const struct qrt_target *start,
     reset_plan(pl, plan);
     copy_joints(plan->start_deg, qs[0]);
     copy_joints(plan->goal_deg, qg[0]);
+    plan->start_ik = bs[0];
+    plan->goal_ik = bg[0];
     set_straight_plan(pl, plan, qs[0], qg[0]);
     return 1;
 }
@@ -769,6 +868,7 @@ static void plan_on_mask(struct qrt_planner *pl, const struct qrt_target *start,
     enum end_outcome o;
     const double *ref;
     double qs[3], qg[3];
+    struct qrt_ik_branch bs, bg;
     long len;
     int merged = pl->points.voxel_m > 0.0;
 
@@ -779,22 +879,26 @@ static void plan_on_mask(struct qrt_planner *pl, const struct qrt_target *start,
         return;
     }
     ref = goal->kind == QRT_TARGET_JOINTS ? goal->value : origin;
-    o = resolve_end(pl, start, ref, qs, &seeds, &plan->end_measured,
+    o = resolve_end(pl, start, ref, qs, &bs, &seeds, &plan->end_measured,
                     &plan->end_clearance_m);
-    if (o != END_UNREACHABLE)
+    if (o != END_UNREACHABLE) {
         copy_joints(plan->start_deg, qs);
+        plan->start_ik = bs;
+    }
     if (o != END_OK) {
         plan->end_free = o == END_STRANDED;
-        set_status(plan, end_status(o, 0), end_detail(o, 0, merged));
+        set_status(plan, end_status(o, 0), end_detail(o, 0, start, merged));
         return;
     }
-    o = resolve_end(pl, goal, qs, qg, &goals, &plan->end_measured,
+    o = resolve_end(pl, goal, qs, qg, &bg, &goals, &plan->end_measured,
                     &plan->end_clearance_m);
-    if (o != END_UNREACHABLE)
+    if (o != END_UNREACHABLE) {
         copy_joints(plan->goal_deg, qg);
+        plan->goal_ik = bg;
+    }
     if (o != END_OK) {
         plan->end_free = o == END_STRANDED;
-        set_status(plan, end_status(o, 1), end_detail(o, 1, merged));
+        set_status(plan, end_status(o, 1), end_detail(o, 1, goal, merged));
         return;
     }
 

@@ -300,6 +300,10 @@ void Daemon::publish_plan(const qrt_plan *plan, const char *status,
             out.start_deg[j] = plan->start_deg[j];
             out.goal_deg[j] = plan->goal_deg[j];
         }
+        // QRT_FACING_* and QRT_ELBOW_* are plan_t's numbers; 0 unless the
+        // goal was a point and the plan gives its joints
+        out.goal_ik_facing = int8_t(plan->goal_ik.facing);
+        out.goal_ik_elbow = int8_t(plan->goal_ik.elbow);
         out.points = int32_t(plan->points);
         out.points_dropped = int32_t(plan->points_dropped);
         out.voxel_m = plan->voxel_m;
@@ -419,6 +423,9 @@ bool Daemon::same_goal(const qrtplan::plan_request_t &a,
 {
     if (a.goal_kind != b.goal_kind || a.has_start != b.has_start)
         return false;
+    if (a.goal_kind == qrtplan::plan_request_t::GOAL_XYZ &&
+        (a.ik_facing != b.ik_facing || a.ik_elbow != b.ik_elbow))
+        return false;
     for (int j = 0; j < 3; j++)
         if (a.goal[j] != b.goal[j] ||
             (a.has_start && a.start_deg[j] != b.start_deg[j]))
@@ -481,6 +488,10 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
                     : QRT_TARGET_JOINTS;
     for (int j = 0; j < 3; j++)
         goal.value[j] = goal_.goal[j];
+    // the constants of plan_request_t are the core's enum values (checked
+    // when the request came in)
+    goal.ik.facing = static_cast<qrt_ik_facing>(goal_.ik_facing);
+    goal.ik.elbow = static_cast<qrt_ik_elbow>(goal_.ik_elbow);
     start.kind = QRT_TARGET_JOINTS;
     if (goal_.has_start && (new_request || !know_here)) {
         for (int j = 0; j < 3; j++)
@@ -547,8 +558,9 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
         plan.end_clearance_m = end_check_clearance(&c);
     }
     if (end_check_measured(&plan)) {
-        end_check_detail(&plan, opts_.params.cspace_margin_deg, detail,
-                         sizeof detail);
+        end_check_detail(
+            &plan, plan.status == QRT_STATUS_GOAL_BLOCKED ? &goal : &start,
+            opts_.params.cspace_margin_deg, detail, sizeof detail);
         plan.detail = detail;
     }
     last_plan_ok_ = plan.status == QRT_STATUS_OK;
@@ -645,10 +657,14 @@ void Daemon::planner_loop(const RunFlags &flags)
                 finite =
                     finite && std::isfinite(goal_.goal[j]) &&
                     (!goal_.has_start || std::isfinite(goal_.start_deg[j]));
-            bool valid =
-                finite &&
-                (goal_.goal_kind == qrtplan::plan_request_t::GOAL_XYZ ||
-                 goal_.goal_kind == qrtplan::plan_request_t::GOAL_JOINTS);
+            bool xyz = goal_.goal_kind == qrtplan::plan_request_t::GOAL_XYZ;
+            qrt_ik_branch ik{};
+            ik.facing = static_cast<qrt_ik_facing>(goal_.ik_facing);
+            ik.elbow = static_cast<qrt_ik_elbow>(goal_.ik_elbow);
+            bool valid = finite &&
+                         (xyz || goal_.goal_kind ==
+                                     qrtplan::plan_request_t::GOAL_JOINTS) &&
+                         (!xyz || qrt_ik_branch_check(&ik) == QRT_OK);
             // a new goal while the drives execute a path: stop, and the new
             // path starts from rest (the master takes paths only at rest,
             // and the old path leads where the operator no longer wants
@@ -667,11 +683,14 @@ void Daemon::planner_loop(const RunFlags &flags)
                     std::lock_guard<std::mutex> lock(mu_);
                     requests_rejected_++;
                     reject("plan request " + std::to_string(goal_.request_id) +
-                           " refused: NaN/Inf or an unknown goal kind");
+                           " refused: NaN/Inf, an unknown goal kind or an "
+                           "unknown IK branch");
                 }
                 publish_plan(nullptr, "invalid_request",
-                             "NaN/Inf values or an unknown goal kind", false, 0,
-                             0, 0, 0, trigger);
+                             "NaN/Inf values, an unknown goal kind or an "
+                             "unknown IK branch (ik_facing and ik_elbow are "
+                             "0, 1 or 2)",
+                             false, 0, 0, 0, 0, trigger);
                 have_goal_ = false;
                 last_plan_ok_ = false;
                 continue;
@@ -1028,17 +1047,36 @@ int Daemon::run(const RunFlags &flags)
             log(LogLevel::error, "LCM receive failed; retrying");
             std::this_thread::sleep_for(std::chrono::milliseconds(100));
         }
+    const uint64_t stop_seen_us = CanLink::now_us();
+    if (can_) {
+        // the arm stops before anything waits for a thread: a plan the
+        // planner is finishing cannot reach the drives (the master takes no
+        // path once shut down), and a thread slow to end cannot delay it
+        can_->set_host_check(nullptr);
+        can_->shutdown();
+    }
     wake_.notify_all();
     guard_wake_.notify_all();
     planner.join();
     clock.join();
     if (guard.joinable())
         guard.join();
+    const uint64_t joined_us = CanLink::now_us();
     if (can_) {
-        can_->set_host_check(nullptr); // the threads it watched have ended
-        can_->quick_stop();
+        // what the drives were last told, and when, for whoever reads why a
+        // consumer fired at a shutdown
+        const CanLinkStatus cs = can_->status();
         can_.reset(); // leaves the drives holding (docs/can-master.md)
-        log(LogLevel::info, "drives stopped");
+        auto ms_after = [stop_seen_us](uint64_t t) {
+            return t ? (double(t) - double(stop_seen_us)) * 1e-3 : 0.0;
+        };
+        log(LogLevel::info,
+            "drives stopped: quick stop written %+.0f ms after the stop was "
+            "seen, the last heartbeat at %+.0f ms, threads ended at %+.0f "
+            "ms (%lu frames unsent, %lu write retries, %lu watchdog trips)",
+            ms_after(cs.last_quick_stop_us), ms_after(cs.last_heartbeat_us),
+            ms_after(joined_us), cs.frames_unsent, cs.write_retries,
+            cs.host_watchdog_trips);
     }
     log(LogLevel::info, "shut down");
     return 0;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 #include <Eigen/Dense>
 
@@ -157,7 +158,13 @@ bool Picture::add(ScanPoints &&scan, int64_t now_us)
     // scans out of the window, by the daemon's clock: a scan stamped in
     // the future is refused before it gets here, so it cannot purge others
     if (window_s_ > 0.0) {
-        const int64_t keep_from = now_us - int64_t(window_s_ * 1e6);
+        // saturated: a clock (or, in the fuzzer, a stamp) near the bottom
+        // of int64 must keep everything, not wrap round
+        const int64_t window_us = int64_t(window_s_ * 1e6);
+        const int64_t keep_from =
+            now_us < std::numeric_limits<int64_t>::min() + window_us
+                ? std::numeric_limits<int64_t>::min()
+                : now_us - window_us;
         for (auto &kv : sensors_)
             while (kv.second.size() > 1 && kv.second.front().utime < keep_from)
                 pop_oldest(&kv.second);

@@ -21,6 +21,7 @@ by themselves when its heartbeat stops.
 import argparse
 import os
 import select
+import socket
 import struct
 import subprocess
 import sys
@@ -72,6 +73,9 @@ class Drive:
         self.ack = False
         self.last_cw = 0
         self.cw_seen = set()
+        # the last controlwords, each with its time on the bus: what the
+        # master had said when a consumer fired
+        self.cw_log = []
         self.setpoints = 0
         self.error_register = 0
         # what the master did by SDO, in order: ("w", index, sub, value) for
@@ -175,6 +179,7 @@ class Drive:
         cw, target = struct.unpack("<Hi", bytes(data))
         with self.lock:
             self.cw_seen.add(cw & 0x8F)
+            self.cw_log = self.cw_log[-7:] + [(round(timestamp, 3), cw)]
             st = self.state
             # device control commands, CiA 402 table 30
             if cw & 0x80 and not self.last_cw & 0x80:
@@ -237,6 +242,9 @@ class Drive:
                 struct.pack("<Hi", self.statusword(), int(round(self.pos))))
 
 
+SO_RCVBUFFORCE = 33  # Linux; the socket module does not name it
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--daemon", required=True)
@@ -276,6 +284,14 @@ def main():
     clock = BusClock()
     network.notifier.add_listener(clock)
     sock = getattr(network.bus, "socket", None)
+    # room for seconds of traffic: the notifier lags the kernel under a
+    # sanitizer, and a full receive queue drops frames unseen (a heartbeat
+    # lost here would fire a consumer the daemon never let lapse)
+    if sock is not None:
+        try:
+            sock.setsockopt(socket.SOL_SOCKET, SO_RCVBUFFORCE, 8 << 20)
+        except OSError:  # not root: as much as rmem_max allows
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 8 << 20)
     stop = threading.Event()
     # frames the notifier has taken off the socket: one it holds but has
     # not handed on yet (its thread descheduled, for up to a second under
@@ -426,10 +442,18 @@ def main():
           f"the drives hold in quick stop: {[d.state for d in drives]}")
     # stopped by the daemon, not by their own consumers: each was in quick
     # stop already when its consumer fired
-    check(all(d.hb_events and d.hb_events[0]["state"] == "quick_stop"
-              for d in drives),
+    stopped_first = all(d.hb_events and d.hb_events[0]["state"] == "quick_stop"
+                        for d in drives)
+    check(stopped_first,
           "the daemon quick-stopped the drives itself before its heartbeat "
           f"stopped: {[d.hb_events[:1] for d in drives]}")
+    if not stopped_first:
+        print("the last controlwords each drive took (bus time, cw): "
+              f"{[d.cw_log for d in drives]}; the daemon's last heartbeats "
+              f"(bus time): {[round(t, 3) for t, _ in heartbeats_127[-4:]]}",
+              flush=True)
+        logs[0].seek(0)
+        print(logs[0].read()[-3000:], flush=True)
 
     # 2. a second daemon brings the drives up again, a plan back to where
     # the arm started, and SIGKILL in the middle of the move: no quick stop

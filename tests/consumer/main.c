@@ -13,8 +13,10 @@ int main(void)
 {
     struct qrt_params prm;
     struct qrt_plan plan;
-    struct qrt_target s = {QRT_TARGET_JOINTS, {-100, 0, 0}};
-    struct qrt_target g = {QRT_TARGET_JOINTS, {100, 0, 0}};
+    struct qrt_target s = {
+        QRT_TARGET_JOINTS, {-100, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
+    struct qrt_target g = {
+        QRT_TARGET_JOINTS, {100, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
     double point[3] = {-0.6, 0.0, 0.0};
     qrt_params_default(&prm);
     if (prm.grid_deg < QRT_GRID_DEG_MIN) /* a library built for coarser */

@@ -49,7 +49,8 @@ def scan_from_points(points, sensor="s0", position=(0.0, 0.0, 0.0),
     return msg
 
 
-def request(goal, kind=0, start=None, request_id=1):
+def request(goal, kind=0, start=None, request_id=1, ik=(0, 0)):
+    """A plan request; ik is (ik_facing, ik_elbow), read for kind 1 (xyz)."""
     r = plan_request_t()
     r.utime = now_us()
     r.request_id = request_id
@@ -57,6 +58,7 @@ def request(goal, kind=0, start=None, request_id=1):
     r.goal = list(goal)
     r.has_start = start is not None
     r.start_deg = list(start) if start is not None else [0.0, 0.0, 0.0]
+    r.ik_facing, r.ik_elbow = ik
     return r
 
 

@@ -138,6 +138,54 @@ def test_the_arm_from_the_options(daemon):
     assert min(w[1] for w in p.waypoints_deg) >= -10
 
 
+def test_the_requested_ik_branch(daemon):
+    """plan_request_t's ik_facing and ik_elbow choose the goal's IK branch
+    and plan_t says which it used (docs/spec.md §Kinematics, Branches): on
+    a shelf, with the arm turned away, any branch reaches over the head from
+    behind (back, elbow up); front and elbow up gets the front solution;
+    front and elbow down is blocked by the board, and the detail says so; a
+    value outside the constants is invalid_request."""
+    d, c = daemon()
+    board = [[0.45 + 0.025 * i, -0.15 + 0.025 * j, 0.35]
+             for i in range(15) for j in range(13)]
+    goal, start = [0.6, 0.0, 0.45], [150, 60, 0]
+    R = plan_request_t
+
+    def plan_for(ik, request_id):
+        c.publish("QRT_SCAN", scan_from_points(board))
+        c.publish("QRT_PLAN_REQUEST", request(goal, kind=R.GOAL_XYZ,
+                                              start=start, ik=ik,
+                                              request_id=request_id))
+        p = c.wait_plan(lambda p: p.request_id == request_id)
+        assert p is not None, d.text()
+        return p
+
+    p = plan_for((R.IK_ANY, R.IK_ANY), 1)
+    assert p.status == "ok", p.detail
+    assert (p.goal_ik_facing, p.goal_ik_elbow) == (2, 1)  # back, up
+    assert p.goal_deg[0] == 180 and p.goal_deg[1] > 90
+    p = plan_for((R.IK_FACING_FRONT, R.IK_ELBOW_UP), 2)
+    assert p.status == "ok", p.detail
+    assert (p.goal_ik_facing, p.goal_ik_elbow) == (1, 1)  # front, up
+    assert p.goal_deg[0] == 0 and list(p.waypoints_deg[-1]) == list(p.goal_deg)
+    p = plan_for((R.IK_FACING_FRONT, R.IK_ELBOW_DOWN), 3)
+    assert p.status == "goal_blocked"
+    assert p.detail == ("every goal configuration facing front with the "
+                        "elbow down collides with obstacle points")
+    assert (p.goal_ik_facing, p.goal_ik_elbow) == (1, 2)
+    p = plan_for((3, R.IK_ANY), 4)
+    assert p.status == "invalid_request" and "IK branch" in p.detail
+    p = plan_for((R.IK_ANY, -1), 5)
+    assert p.status == "invalid_request"
+    # a joints goal has no branch, whatever the fields say
+    c.publish("QRT_SCAN", scan_from_points(board))
+    c.publish("QRT_PLAN_REQUEST", request([-90, 60, 0], start=start,
+                                          ik=(1, 1), request_id=6))
+    p = c.wait_plan(lambda p: p.request_id == 6)
+    assert p is not None and p.status == "ok", d.text()
+    assert (p.goal_ik_facing, p.goal_ik_elbow) == (0, 0)
+
+
 def test_each_links_radius_from_the_options(daemon):
     """A point 45 mm from link 3 at the start: clear of a 20 mm link with the
     10 mm margin, not of a 40 mm one. Only link 3's own radius decides."""

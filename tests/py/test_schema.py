@@ -204,6 +204,13 @@ BAD_SCENES = [
     (["arm", "link_radius_m"], [0.02, 0.02, -0.01]),
     (["arm", "limits_deg"], [[-190, 180], [-40, 180], [-180, 140]]),
     (["arm", "limits_deg"], [[-180, 180], [-40, 180]]),
+    # IK branch requests: only on xyz_m, only the named values
+    (["goal"], {"xyz_m": [0.6, 0, 0.45], "ik": {"facing": "sideways"}}),
+    (["goal"], {"xyz_m": [0.6, 0, 0.45], "ik": {"elbow": "both"}}),
+    (["goal"], {"xyz_m": [0.6, 0, 0.45], "ik": {"elbow": 1}}),
+    (["goal"], {"xyz_m": [0.6, 0, 0.45], "ik": {"wrist": "up"}}),
+    (["goal"], {"xyz_m": [0.6, 0, 0.45], "ik": "front"}),
+    (["start"], {"joints_deg": [-100, 0, 0], "ik": {"facing": "front"}}),
 ]
 
 

@@ -21,8 +21,10 @@ int main(void)
     test_seed(9191);
     for (trial = 0; trial < test_count(60); trial++) {
         struct qrt_params prm;
-        struct qrt_target s = {QRT_TARGET_JOINTS, {0, 0, 0}};
-        struct qrt_target g = {QRT_TARGET_JOINTS, {0, 0, 0}};
+        struct qrt_target s = {
+            QRT_TARGET_JOINTS, {0, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
+        struct qrt_target g = {
+            QRT_TARGET_JOINTS, {0, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
         double cloud[3 * 40], q[3], p[4][3], t;
         int i, k, seg, blocked, now, straight, rc;
         for (i = 0; i < 40; i++) {

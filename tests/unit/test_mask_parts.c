@@ -81,7 +81,8 @@ int main(void)
         }
         /* a plan on a half-built mask is refused */
         {
-            struct qrt_target s = {QRT_TARGET_JOINTS, {0, 0, 0}};
+            struct qrt_target s = {
+                QRT_TARGET_JOINTS, {0, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
             struct qrt_plan plan;
             CHECK(qrt_planner_plan(&pl, &s, &s, &plan) == QRT_E_INVALID,
                   "a plan before _end must be refused");

@@ -145,8 +145,10 @@ static void random_plans(void)
     long indexed = 0, unindexed = 0;
     for (trial = 0; trial < test_count(200); trial++) {
         struct qrt_params prm;
-        struct qrt_target s = {QRT_TARGET_JOINTS, {0, 0, 0}};
-        struct qrt_target g = {QRT_TARGET_JOINTS, {0, 0, 0}};
+        struct qrt_target s = {
+            QRT_TARGET_JOINTS, {0, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
+        struct qrt_target g = {
+            QRT_TARGET_JOINTS, {0, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
         long n = make_scene((int)(trial % 3)), built;
         int rc_full, rc_now;
         qrt_params_default(&prm);
@@ -253,8 +255,10 @@ static void kept_rows_forgotten(void)
     long trial, same = 0;
     for (trial = 0; trial < test_count(30); trial++) {
         struct qrt_params prm;
-        struct qrt_target s = {QRT_TARGET_JOINTS, {0, 0, 0}};
-        struct qrt_target g = {QRT_TARGET_JOINTS, {0, 0, 0}};
+        struct qrt_target s = {
+            QRT_TARGET_JOINTS, {0, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
+        struct qrt_target g = {
+            QRT_TARGET_JOINTS, {0, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
         double path[2][3];
         long n = make_scene(0);
         int first;
@@ -305,8 +309,10 @@ static long ten_spheres(void)
 static void fraction_built(void)
 {
     struct qrt_params prm;
-    struct qrt_target s = {QRT_TARGET_JOINTS, {-90, 0, 0}};
-    struct qrt_target g = {QRT_TARGET_JOINTS, {90, 0, 0}};
+    struct qrt_target s = {
+        QRT_TARGET_JOINTS, {-90, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
+    struct qrt_target g = {
+        QRT_TARGET_JOINTS, {90, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
     long n = ten_spheres(), built, total;
     qrt_params_default(&prm);
     /* the straight motion passes under the spheres: without shortcuts it
@@ -385,8 +391,10 @@ static void too_many_clusters(void)
 {
     struct qrt_params prm;
     /* the arm folded (elbow up, link 3 hanging back): inside the shell */
-    struct qrt_target s = {QRT_TARGET_JOINTS, {-90, 90, -160}};
-    struct qrt_target g = {QRT_TARGET_JOINTS, {90, 60, -160}};
+    struct qrt_target s = {
+        QRT_TARGET_JOINTS, {-90, 90, -160}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
+    struct qrt_target g = {
+        QRT_TARGET_JOINTS, {90, 60, -160}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
     long n = 0;
     int i, j, k;
     for (i = 0; i < 40; i++) /* a shell 0.75 .. 0.95 m from the base */

@@ -84,7 +84,10 @@ static void test_random_scenes(void)
     double radius[3] = {0.03, 0.03, 0.03};
     for (trial = 0; trial < test_count(150); trial++) {
         struct qrt_params prm;
-        struct qrt_target s, g;
+        struct qrt_target s = {
+            QRT_TARGET_JOINTS, {0, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
+        struct qrt_target g = {
+            QRT_TARGET_JOINTS, {0, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
         struct qrt_plan plan;
         long n = 0;
         int k, spheres = 1 + trial % 5;
@@ -138,8 +141,10 @@ static void test_random_scenes(void)
 static void test_table4(void)
 {
     struct qrt_params prm;
-    struct qrt_target s = {QRT_TARGET_JOINTS, {-100, 0, 0}};
-    struct qrt_target g = {QRT_TARGET_JOINTS, {100, 0, 0}};
+    struct qrt_target s = {
+        QRT_TARGET_JOINTS, {-100, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
+    struct qrt_target g = {
+        QRT_TARGET_JOINTS, {100, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
     struct qrt_plan plan;
     long n = sphere(cloud, -0.6, 0.0, 0.05, 0.1, 38);
     double radius[3] = {0.03, 0.03, 0.03};
@@ -161,11 +166,16 @@ static void test_table4(void)
 static void test_statuses(void)
 {
     struct qrt_params prm;
-    struct qrt_target s = {QRT_TARGET_JOINTS, {0, 0, 0}};
-    struct qrt_target g = {QRT_TARGET_JOINTS, {90, 0, 0}};
-    struct qrt_target far = {QRT_TARGET_XYZ, {1.5, 0, 0}};
-    struct qrt_target bad = {QRT_TARGET_JOINTS, {0, -60, 0}};
-    struct qrt_target nan_t = {QRT_TARGET_XYZ, {NAN, 0, 0}};
+    struct qrt_target s = {
+        QRT_TARGET_JOINTS, {0, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
+    struct qrt_target g = {
+        QRT_TARGET_JOINTS, {90, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
+    struct qrt_target far = {
+        QRT_TARGET_XYZ, {1.5, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
+    struct qrt_target bad = {
+        QRT_TARGET_JOINTS, {0, -60, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
+    struct qrt_target nan_t = {
+        QRT_TARGET_XYZ, {NAN, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
     struct qrt_plan plan;
     double on_tip[3] = {0.96, 0.0, 0.0};
     long n;
@@ -230,8 +240,11 @@ static void test_starts_near_obstacles(void)
     qrt_planner_add_points(&pl, cloud, n);
     qrt_planner_build_mask(&pl);
     for (trial = 0; trial < 4000 && tried < test_count(60); trial++) {
-        struct qrt_target s = {QRT_TARGET_JOINTS, {0, 0, 0}};
-        struct qrt_target g = {QRT_TARGET_JOINTS, {-150, 30, -20}};
+        struct qrt_target s = {
+            QRT_TARGET_JOINTS, {0, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
+        struct qrt_target g = {QRT_TARGET_JOINTS,
+                               {-150, 30, -20},
+                               {QRT_FACING_ANY, QRT_ELBOW_ANY}};
         struct qrt_plan plan;
         double c;
         s.value[0] = test_uniform(-40, 40);
@@ -330,9 +343,11 @@ static void test_abi_guard(void)
               strstr(why, "QRT_LAZY_INDEX_AFTER"),
           "longest settings sentence cut: '%s'", why);
     worst = qrt_abi_here();
-    worst.planner_bytes = worst.plan_bytes = worst.enum_bytes = LONG_MIN;
+    worst.planner_bytes = worst.plan_bytes = worst.target_bytes =
+        worst.enum_bytes = LONG_MIN;
     qrt_abi_check(&worst, why, sizeof why);
-    CHECK(strlen(why) + 1 < sizeof why && strstr(why, "ABI option)"),
+    CHECK(strlen(why) + 1 < sizeof why && strstr(why, "ABI option)") &&
+              strstr(why, "sizeof(struct qrt_target)"),
           "longest sizes sentence cut: '%s'", why);
 
     CHECK(strstr(qrt_err_name(QRT_E_ABI), "settings") != NULL, "err name");

@@ -218,8 +218,10 @@ static void test_capacity(void)
 {
     static double xyz[3 * 4096];
     struct qrt_params prm;
-    struct qrt_target s = {QRT_TARGET_JOINTS, {0, 0, 0}};
-    struct qrt_target g = {QRT_TARGET_JOINTS, {90, 0, 0}};
+    struct qrt_target s = {
+        QRT_TARGET_JOINTS, {0, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
+    struct qrt_target g = {
+        QRT_TARGET_JOINTS, {90, 0, 0}, {QRT_FACING_ANY, QRT_ELBOW_ANY}};
     struct qrt_plan plan;
     int batch, i;
     qrt_params_default(&prm);
