@@ -613,9 +613,9 @@ static void reset_plan(const struct qrt_planner *pl, struct qrt_plan *plan)
                                    : pre " with the elbow down" post)
 /* clang-format on */
 
-/* end_detail for a target that asks for an IK branch; merged as there. */
+/* end_detail for a target that asks for an IK branch. */
 static const char *branch_detail(enum end_outcome o, int is_goal,
-                                 const struct qrt_ik_branch *ik, int merged)
+                                 const struct qrt_ik_branch *ik)
 {
     switch (o) {
     case END_UNREACHABLE:
@@ -628,27 +628,6 @@ static const char *branch_detail(enum end_outcome o, int is_goal,
                                          " collides with obstacle points")
                        : BRANCH_SENTENCE(ik, "every start configuration",
                                          " collides with obstacle points");
-    case END_UNPROVEN:
-        if (merged)
-            return is_goal
-                       ? BRANCH_SENTENCE(ik, "goal",
-                                         " cannot be proved free under point "
-                                         "merging; only the exact points can "
-                                         "tell whether it collides")
-                       : BRANCH_SENTENCE(ik, "start",
-                                         " cannot be proved free under point "
-                                         "merging; only the exact points can "
-                                         "tell whether it collides");
-        return is_goal ? BRANCH_SENTENCE(ik, "goal",
-                                         " is clear of the points, but not by "
-                                         "the C-space margin and rounding the "
-                                         "planner adds, so cannot be proved "
-                                         "free")
-                       : BRANCH_SENTENCE(ik, "start",
-                                         " is clear of the points, but not by "
-                                         "the C-space margin and rounding the "
-                                         "planner adds, so cannot be proved "
-                                         "free");
     case END_STRANDED:
         return is_goal ? BRANCH_SENTENCE(ik, "goal",
                                          " is free but no move to it from the "
@@ -656,6 +635,10 @@ static const char *branch_detail(enum end_outcome o, int is_goal,
                        : BRANCH_SENTENCE(ik, "start",
                                          " is free but no move from it to the "
                                          "lattice can be proved safe");
+    /* END_UNPROVEN keeps end_detail's sentence: a host that measures the
+     * end names the branch (src/cli/end_check.c), and literals for every
+     * branch would cost the board's flash */
+    case END_UNPROVEN:
     case END_OK:
         break;
     }
@@ -668,9 +651,9 @@ static const char *branch_detail(enum end_outcome o, int is_goal,
 static const char *end_detail(enum end_outcome o, int is_goal,
                               const struct qrt_target *t, int merged)
 {
-    if (o != END_OK && t->kind == QRT_TARGET_XYZ &&
+    if (o != END_OK && o != END_UNPROVEN && t->kind == QRT_TARGET_XYZ &&
         (t->ik.facing != QRT_FACING_ANY || t->ik.elbow != QRT_ELBOW_ANY))
-        return branch_detail(o, is_goal, &t->ik, merged);
+        return branch_detail(o, is_goal, &t->ik);
     switch (o) {
     case END_UNREACHABLE:
         return is_goal ? "goal point is outside the arm's reach or limits"

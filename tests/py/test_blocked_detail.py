@@ -181,3 +181,21 @@ def test_exact_points_within_the_cspace_margin_only(tmp_path):
     assert p["end_clearance_m"] == pytest.approx(0.005, abs=1e-6)
     assert "clear of the points by 5.0 mm beyond the margin" in p["detail"]
     assert "C-space margin (2 deg)" in p["detail"]
+
+
+def test_requested_branch_is_named_under_merging(slot):
+    """An xyz goal asking for an IK branch, blocked under merged points: the
+    sentence measured from the exact points names the branch, as the core's
+    own sentences do, and claims no collision."""
+    d, _ = slot
+    scene = slot_scene(start=(0.0, 90.0, 0.0), points_file="hole.pcd")
+    scene["goal"] = {"xyz_m": [0.6, 0.0, 0.1],
+                     "ik": {"facing": "front", "elbow": "up"}}
+    p = plan(d, scene, "branch")
+    assert p["stats"]["voxel_m"] >= 0.032, p["stats"]
+    assert p["status"] == "goal_blocked", p
+    assert p["goal_ik"] == {"facing": "front", "elbow": "up"}, p
+    assert p["detail"].startswith(
+        "goal facing front with the elbow up is clear of the points by "), p
+    assert "collides" not in p["detail"], p["detail"]
+    assert p["end_clearance_m"] > 0.0
