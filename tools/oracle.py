@@ -5,9 +5,12 @@ Shares no code with the planner: forward kinematics from docs/spec.md
 §Kinematics, exact point-to-segment distances in numpy, and the path sampled
 at no more than 0.1 degree per joint between waypoints (alpha the short way
 round, its step taken in (-180, 180]). A configuration collides when any
-point is closer than link_radius + margin to a link (strict <). An end
-given as xyz_m must be reached, in the IK branch its "ik" asks for, and a
-branch the plan reports (start_ik, goal_ik) must be the one measured.
+point is closer than link_radius + margin to a link (strict <), or, for an
+arm with a tool, closer than tool radius + margin to the tool's segment
+from the end effector Pe to the tip Pe + length * unit(Pe - P2). An end
+given as xyz_m must be reached (by the tip when its "aim" is "tool_tip"),
+in the IK branch its "ik" asks for, and a branch the plan reports
+(start_ik, goal_ik) must be the one measured.
 
     python tools/oracle.py SCENE.json PLAN.json   # exit 0 safe, 1 not
 
@@ -37,6 +40,31 @@ class Arm:
         self.limits = tuple(tuple(l) for l in arm.get("limits_deg", DEFAULT_LIMITS))
         self.margin = float(scene.get("margin_m", 0.01))
         self.alpha_wraps = tuple(self.limits[0]) == (-180.0, 180.0)
+        tool = arm.get("tool", {"length_m": 0.0, "radius_m": 0.0})
+        self.tool_length = float(tool["length_m"])
+        self.tool_radius = float(tool["radius_m"])
+
+    def capsules(self, q):
+        """(N, 3) joint angles -> segment ends (N, K, 2, 3) and radii (K,):
+        the three links and, with a tool, the tool from Pe to its tip."""
+        p = self.joints(q)
+        ends = [p[:, k:k + 2, :] for k in range(3)]
+        radii = list(self.radii)
+        if self.tool_length > 0.0:
+            ends.append(np.stack([p[:, 3, :], self.tips(p)], axis=1))
+            radii.append(self.tool_radius)
+        return np.stack(ends, axis=1), np.asarray(radii, float)
+
+    def tips(self, p):
+        """(N, 4, 3) joint positions -> (N, 3) tool tips (Pe without a tool):
+        Pe + length * unit(Pe - P2)."""
+        d = p[:, 3, :] - p[:, 2, :]
+        n = np.linalg.norm(d, axis=1)[:, None]
+        return p[:, 3, :] + self.tool_length * d / np.where(n > 0, n, 1.0)
+
+    def tip(self, q):
+        """The tool tip of one configuration (Pe without a tool)."""
+        return self.tips(self.joints(q))[0]
 
     def joints(self, q):
         """(N, 3) joint angles in degrees -> (N, 4, 3) joint positions."""
@@ -77,11 +105,11 @@ def clearances(arm, qs, points, batch=48, reach=0.05):
     if len(points) == 0:
         return out
     for start in range(0, len(qs), batch):
-        p = arm.joints(qs[start:start + batch])
-        best = np.full(len(p), np.inf)
-        for k in range(3):
-            a, b = p[:, k, :], p[:, k + 1, :]
-            grow = arm.radii[k] + arm.margin + reach
+        seg, radii = arm.capsules(qs[start:start + batch])
+        best = np.full(len(seg), np.inf)
+        for k in range(len(radii)):
+            a, b = seg[:, k, 0, :], seg[:, k, 1, :]
+            grow = radii[k] + arm.margin + reach
             lo = np.minimum(a.min(axis=0), b.min(axis=0)) - grow
             hi = np.maximum(a.max(axis=0), b.max(axis=0)) + grow
             near = points[np.all((points >= lo) & (points <= hi), axis=1)]
@@ -89,7 +117,7 @@ def clearances(arm, qs, points, batch=48, reach=0.05):
                 best = np.minimum(best, reach)
                 continue
             d = segment_distances(near, a, b)
-            best = np.minimum(best, d.min(axis=1) - arm.radii[k] - arm.margin)
+            best = np.minimum(best, d.min(axis=1) - radii[k] - arm.margin)
         out[start:start + batch] = best
     return out
 
@@ -208,14 +236,17 @@ class Result:
         return "; ".join(self.problems)
 
 
-def ik_branch(arm, q, tol=1e-9):
+def ik_branch(arm, q, tol=1e-9, tool_tip=False):
     """The IK branch of configuration q (docs/spec.md §Kinematics, Branches)
     measured on its joint positions: (facing, elbow). Facing: the tip ahead
     of the base axis along alpha (front) or behind it (back), both within
     tol of the axis. Elbow: P2 above the line P1-Pe at P2's horizontal place
     (up) or below it (down), both within tol of the line or when the line is
-    vertical."""
+    vertical. tool_tip: the target is the tool tip's, which stands for Pe
+    (the tip arm's end effector)."""
     p = arm.joints(q)[0]
+    if tool_tip:
+        p[3] = arm.tip(q)
     a = math.radians(q[0])
     h = np.array([math.cos(a), math.sin(a), 0.0])
     if math.hypot(p[3][0], p[3][1]) <= tol:
@@ -229,10 +260,18 @@ def ik_branch(arm, q, tol=1e-9):
     return facing, elbow
 
 
+def aims_tool_tip(target):
+    """An xyz_m target's aim (docs/spec.md §Scene): the tool tip or Pe."""
+    aim = target.get("aim", "end_effector")
+    if aim not in ("end_effector", "tool_tip"):
+        raise ValueError(f"aim {aim!r} is neither end_effector nor tool_tip")
+    return aim == "tool_tip"
+
+
 def check_branch(arm, name, target, q_end, reported, problems):
     """An xyz_m end: the branch its target's ik asks for, and the one the
     plan reports (when it does), against the branch measured at q_end."""
-    measured = ik_branch(arm, q_end)
+    measured = ik_branch(arm, q_end, tool_tip=aims_tool_tip(target))
     asked = target.get("ik", {})
     for i, key in enumerate(("facing", "elbow")):
         want = asked.get(key, "any")
@@ -266,10 +305,11 @@ def check_path(scene, plan, points):
     if not np.isfinite(pts).all():
         res.problems.append("the scene has points that are not finite")
         return res
-    arm_numbers = [*arm.links, *arm.radii, arm.margin, *np.ravel(arm.limits)]
+    arm_numbers = [*arm.links, *arm.radii, arm.margin, *np.ravel(arm.limits),
+                   arm.tool_length, arm.tool_radius]
     if not np.isfinite(np.asarray(arm_numbers, float)).all():
-        res.problems.append("the arm's lengths, radii, margin or limits are "
-                            "not finite")
+        res.problems.append("the arm's lengths, radii, margin, limits or tool "
+                            "are not finite")
         return res
     q = sample_path(arm, wps)
     res.samples = len(q)
@@ -294,7 +334,8 @@ def check_path(scene, plan, points):
             if not np.max(np.abs(d)) <= 1e-6:  # NaN fails too
                 res.problems.append(f"path {name} {q_end} is not {target}")
         else:
-            tip = arm.joints(q_end)[0, 3]
+            tip = (arm.tip(q_end) if aims_tool_tip(target)
+                   else arm.joints(q_end)[0, 3])
             if not np.linalg.norm(tip - np.asarray(target["xyz_m"], float)) <= 1e-6:
                 res.problems.append(f"path {name} tip {tip.tolist()} misses {target}")
             check_branch(arm, name, target, q_end, plan.get(f"{name}_ik"),

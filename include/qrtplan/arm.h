@@ -24,15 +24,46 @@ struct qrt_arm {
     double link_m[3];        /* L1, L2, L3 */
     double link_radius_m[3]; /* capsule radius of each link */
     double limit_deg[3][2];  /* [joint][lo, hi]; alpha wraps iff [-180, 180] */
+    /* A tool on link 3 (docs/spec.md section Arm, Tool): a fourth capsule
+     * of radius tool_radius_m from the end effector Pe to the tool tip
+     * Pe + tool_m * unit(Pe - P2), collinear with link 3. 0 and 0: no
+     * tool. */
+    double tool_m;
+    double tool_radius_m;
 };
 
-/* The default arm: the links above (Table 1 of the paper, radii 0.02 m) and
- * QRT_ARM_DEFAULT_LIMIT_DEG. */
+/* The default arm: the links above (Table 1 of the paper, radii 0.02 m),
+ * QRT_ARM_DEFAULT_LIMIT_DEG and no tool. */
 void qrt_arm_default(struct qrt_arm *arm);
 
 /* QRT_OK, or QRT_E_INVALID for non-finite, negative or zero lengths,
- * negative radii, or inverted or out-of-range limits. */
+ * negative radii, inverted or out-of-range limits, a tool length or radius
+ * that is not finite or is negative (length at most 100 m, radius at most
+ * 10 m), or a tool radius without a tool length (a tool of length 0 is no
+ * tool). */
 int qrt_arm_validate(const struct qrt_arm *arm);
+
+/* The same arm with the tool tip as its end effector: link 3 lengthened by
+ * the tool (collinear with it, so the joints that put this arm's Pe at a
+ * point put the first arm's tool tip there), and no tool. Without a tool,
+ * a copy. */
+void qrt_arm_tip_arm(const struct qrt_arm *arm, struct qrt_arm *tip_arm);
+
+/* The arm the planner checks collisions with (docs/spec.md section
+ * Collision), the one place it is derived: qrt_arm_tip_arm, with link 3's
+ * radius the larger of link 3's and the tool's. Its link-3 capsule holds
+ * both link 3's and the tool's, so it is never less than the arm with its
+ * tool. Without a tool, a copy. */
+void qrt_arm_collision_arm(const struct qrt_arm *arm,
+                           struct qrt_arm *collision_arm);
+
+/* How far from the base origin any point of the arm's surface (links and
+ * tool) can lie: L1 + L2 + L3 + tool_m plus the largest radius. */
+double qrt_arm_reach_m(const struct qrt_arm *arm);
+
+/* The tool tip in metres for joints in degrees (Pe without a tool). */
+void qrt_arm_tool_tip(const struct qrt_arm *arm, const double joints_deg[3],
+                      double tip_m[3]);
 
 /* True when alpha's limits are the full circle, so alpha wraps. */
 int qrt_arm_alpha_wraps(const struct qrt_arm *arm);

@@ -55,9 +55,10 @@
  *               QRT_MAX_POINTS holds merged points instead: one entry a
  *               voxel, the box of its points, standing for every one of
  *               them (qrtplan/points.h).
- *   clearance   of a configuration: the least, over points and links, of
- *               the point's distance to the link's segment minus the link's
- *               radius and the workspace margin (metres); <= 0 means the
+ *   clearance   of a configuration: the least, over points and links (and
+ *               the tool, when the arm has one), of the point's distance
+ *               to the link's segment minus the link's radius and the
+ *               workspace margin (metres); <= 0 means the
  *               configuration collides (docs/spec.md, the rule of
  *               section Collision).
  */
@@ -78,16 +79,24 @@
 extern "C" {
 #endif
 
-enum qrt_target_kind { QRT_TARGET_JOINTS = 0, QRT_TARGET_XYZ = 1 };
+/* QRT_TARGET_TOOL_TIP: a point for the tool tip (qrt_arm_tool_tip) to
+ * reach, solved as the end-effector point of qrt_arm_tip_arm (its IK
+ * branches are that arm's); the same as QRT_TARGET_XYZ without a tool. */
+enum qrt_target_kind {
+    QRT_TARGET_JOINTS = 0,
+    QRT_TARGET_XYZ = 1,
+    QRT_TARGET_TOOL_TIP = 2
+};
 
 /* Set every field: ik {QRT_FACING_ANY, QRT_ELBOW_ANY} (zeros) allows every
  * IK branch, and an xyz target's request outside the enums is refused. */
 struct qrt_target {
     enum qrt_target_kind kind;
-    double value[3]; /* joints in degrees, or an end-effector point in metres */
-    /* QRT_TARGET_XYZ only (ignored for joints): the IK branches it may take
-     * (qrtplan/arm.h, qrt_ik_branch_check); among those, the usual order
-     * (docs/spec.md section Planning) picks */
+    double value[3]; /* joints in degrees, or a point in metres: the end
+                        effector's (QRT_TARGET_XYZ) or the tool tip's */
+    /* QRT_TARGET_XYZ and QRT_TARGET_TOOL_TIP only (ignored for joints):
+     * the IK branches it may take (qrtplan/arm.h, qrt_ik_branch_check);
+     * among those, the usual order (docs/spec.md section Planning) picks */
     struct qrt_ik_branch ik;
 };
 

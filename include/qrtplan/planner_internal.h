@@ -142,6 +142,9 @@ struct qrt_raster; /* the conversion's tables (src/core/raster.h) */
 
 struct qrt_planner {
     struct qrt_params params;
+    /* params.arm's collision arm (qrt_arm_collision_arm): every collision
+     * check, the mask's and the points', uses it */
+    struct qrt_arm collision_arm;
     struct qrt_points points;
     struct qrt_mask mask;
     double radius_m[3]; /* per-link collision radius the mask was built for */

@@ -39,7 +39,12 @@ void end_check_begin(struct end_check *c, const struct qrt_planner *pl,
          * its alpha is the hint for a point on the base axis */
         double sols[4][3];
         struct qrt_ik_branch found[4];
-        int all = qrt_arm_ik_branches(arm, t->value, reported[0], sols, found);
+        struct qrt_arm tip_arm; /* a tool tip's point: the tip arm's IK */
+        int all;
+        qrt_arm_tip_arm(arm, &tip_arm);
+        all =
+            qrt_arm_ik_branches(t->kind == QRT_TARGET_TOOL_TIP ? &tip_arm : arm,
+                                t->value, reported[0], sols, found);
         c->n = 0;
         for (i = 0; i < all; i++) {
             if (!qrt_ik_branch_allows(&t->ik, &found[i]))
@@ -85,13 +90,13 @@ static void branch_phrase(const struct qrt_ik_branch *ik, char *buf, size_t len)
 }
 
 void end_check_detail(const struct qrt_plan *plan, const struct qrt_target *t,
-                      double cspace_margin_deg, char *buf, size_t len)
+                      const struct qrt_params *params, char *buf, size_t len)
 {
     const char *end =
         plan->status == QRT_STATUS_GOAL_BLOCKED ? "goal" : "start";
     double mm = 1000.0 * plan->end_clearance_m;
     char branch[48] = "";
-    if (t->kind == QRT_TARGET_XYZ)
+    if (t->kind != QRT_TARGET_JOINTS)
         branch_phrase(&t->ik, branch, sizeof branch);
     if (plan->end_clearance_m <= 0.0 && branch[0])
         snprintf(buf, len,
@@ -106,10 +111,17 @@ void end_check_detail(const struct qrt_plan *plan, const struct qrt_target *t,
                  "but cannot be proved free under point merging (voxel "
                  "%.0f mm)",
                  end, branch, mm, 1000.0 * plan->voxel_m);
+    else if (params->arm.tool_m > 0.0)
+        snprintf(buf, len,
+                 "%s%s is clear of the points by %.1f mm beyond the margin, "
+                 "but cannot be proved free within the C-space margin "
+                 "(%g deg), the points' float rounding and the tool's "
+                 "collision capsule",
+                 end, branch, mm, params->cspace_margin_deg);
     else
         snprintf(buf, len,
                  "%s%s is clear of the points by %.1f mm beyond the margin, "
                  "but cannot be proved free within the C-space margin "
                  "(%g deg) and the points' float rounding",
-                 end, branch, mm, cspace_margin_deg);
+                 end, branch, mm, params->cspace_margin_deg);
 }

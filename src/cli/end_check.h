@@ -35,7 +35,7 @@ int end_check_measured(const struct qrt_plan *plan);
 
 /* Start measuring the blocked end of plan: the configurations of start or
  * goal (of an xyz target, every IK solution within the arm's limits of the
- * branch the target asks for). */
+ * branch the target asks for; of a tool tip's, the tip arm's). */
 void end_check_begin(struct end_check *c, const struct qrt_planner *pl,
                      const struct qrt_arm *arm, const struct qrt_plan *plan,
                      const struct qrt_target *start,
@@ -51,11 +51,12 @@ double end_check_clearance(const struct end_check *c);
 /* The detail of a blocked plan whose end was measured (plan->end_measured
  * 1, plan->end_clearance_m the clearance): "collides" only where that is
  * <= 0; else how clear it is, and what kept it from being proved free
- * (the voxel edge under merging, the C-space margin otherwise). t is the
- * blocked end's target: the IK branch it asks for is named, as the core's
- * details name it. */
+ * (the voxel edge under merging, the C-space margin otherwise, and the
+ * tool's collision capsule when the arm has a tool). t is the blocked
+ * end's target: the IK branch it asks for is named, as the core's details
+ * name it. params: the planner's. */
 void end_check_detail(const struct qrt_plan *plan, const struct qrt_target *t,
-                      double cspace_margin_deg, char *buf, size_t len);
+                      const struct qrt_params *params, char *buf, size_t len);
 
 #ifdef __cplusplus
 }

@@ -345,7 +345,7 @@ static void measure_blocked_end(const char *path, const struct scene *sc,
         return;
     end_check_detail(
         plan, plan->status == QRT_STATUS_GOAL_BLOCKED ? &sc->goal : &sc->start,
-        sc->params.cspace_margin_deg, detail, len);
+        &sc->params, detail, len);
     plan->detail = detail;
 }
 

@@ -194,11 +194,64 @@ static int only_keys(const struct json *obj, const char *what,
     return 0;
 }
 
+/* One required number of obj, named what in messages, within [lo, hi]. */
+static int get_required(const struct json *obj, const char *key,
+                        const char *what, double lo, double hi, double *out,
+                        char *err, size_t err_len)
+{
+    const struct json *v = json_get(obj, key);
+    if (!v) {
+        snprintf(err, err_len, "missing field \"%s\" in %s", key, what);
+        return -1;
+    }
+    if (v->type != JSON_NUMBER) {
+        snprintf(err, err_len, "%s.%s must be a number, not %s", what, key,
+                 json_type_name(v->type));
+        return -1;
+    }
+    if (v->number < lo || v->number > hi) {
+        snprintf(err, err_len, "%s.%s = %g is outside [%g, %g]", what, key,
+                 v->number, lo, hi);
+        return -1;
+    }
+    *out = v->number;
+    return 0;
+}
+
+/* arm.tool: a capsule on link 3 beyond the end effector (docs/spec.md
+ * section Arm, Tool). */
+static int parse_tool(const struct json *tool, struct qrt_arm *out, char *err,
+                      size_t err_len)
+{
+    static const char *const keys[] = {"length_m", "radius_m", NULL};
+    if (tool->type != JSON_OBJECT) {
+        snprintf(err, err_len,
+                 "arm.tool must be an object with length_m and radius_m, not "
+                 "%s",
+                 json_type_name(tool->type));
+        return -1;
+    }
+    if (only_keys(tool, "arm.tool", keys, err, err_len) ||
+        get_required(tool, "length_m", "arm.tool", 0.0, 100.0, &out->tool_m,
+                     err, err_len) ||
+        get_required(tool, "radius_m", "arm.tool", 0.0, 10.0,
+                     &out->tool_radius_m, err, err_len))
+        return -1;
+    if (out->tool_m == 0.0 && out->tool_radius_m > 0.0) {
+        snprintf(err, err_len,
+                 "arm.tool.radius_m = %g needs a length_m above 0 (a tool of "
+                 "length 0 is no tool)",
+                 out->tool_radius_m);
+        return -1;
+    }
+    return 0;
+}
+
 static int parse_arm(const struct json *arm, struct qrt_arm *out, char *err,
                      size_t err_len)
 {
     static const char *const keys[] = {"links_m", "link_radius_m", "limits_deg",
-                                       NULL};
+                                       "tool", NULL};
     const struct json *v;
     int j;
     if (arm->type != JSON_OBJECT) {
@@ -236,6 +289,8 @@ static int parse_arm(const struct json *arm, struct qrt_arm *out, char *err,
             return -1;
         }
     }
+    if ((v = json_get(arm, "tool")) && parse_tool(v, out, err, err_len))
+        return -1;
     return 0;
 }
 
@@ -306,8 +361,9 @@ static int parse_target(const struct json *root, const char *key,
                         const struct qrt_arm *arm, struct qrt_target *t,
                         char *err, size_t err_len)
 {
-    static const char *const keys[] = {"joints_deg", "xyz_m", "ik", NULL};
-    const struct json *v = json_get(root, key), *j, *x;
+    static const char *const keys[] = {"joints_deg", "xyz_m", "ik", "aim",
+                                       NULL};
+    const struct json *v = json_get(root, key), *j, *x, *aim;
     char what[32];
     if (!v) {
         snprintf(err, err_len, "missing field \"%s\"", key);
@@ -331,6 +387,32 @@ static int parse_target(const struct json *root, const char *key,
     }
     t->ik.facing = QRT_FACING_ANY;
     t->ik.elbow = QRT_ELBOW_ANY;
+    t->kind = j ? QRT_TARGET_JOINTS : QRT_TARGET_XYZ;
+    if ((aim = json_get(v, "aim")) != NULL) {
+        if (j) {
+            snprintf(err, err_len,
+                     "%s.aim applies only to xyz_m (joints_deg names one "
+                     "configuration)",
+                     key);
+            return -1;
+        }
+        if (aim->type == JSON_STRING && strcmp(aim->string, "tool_tip") == 0)
+            t->kind = QRT_TARGET_TOOL_TIP;
+        else if (aim->type != JSON_STRING ||
+                 strcmp(aim->string, "end_effector") != 0) {
+            if (aim->type == JSON_STRING)
+                snprintf(err, err_len,
+                         "%s.aim is \"%.64s\"; valid: \"end_effector\", "
+                         "\"tool_tip\"",
+                         key, aim->string);
+            else
+                snprintf(err, err_len,
+                         "%s.aim must be a string, not %s (valid: "
+                         "\"end_effector\", \"tool_tip\")",
+                         key, json_type_name(aim->type));
+            return -1;
+        }
+    }
     if ((v = json_get(v, "ik")) != NULL) {
         if (j) {
             snprintf(err, err_len,
@@ -343,7 +425,6 @@ static int parse_target(const struct json *root, const char *key,
             return -1;
     }
     snprintf(what, sizeof what, "%s.%s", key, j ? "joints_deg" : "xyz_m");
-    t->kind = j ? QRT_TARGET_JOINTS : QRT_TARGET_XYZ;
     if (get_numbers(j ? j : x, what, 3, -HUGE_VAL, HUGE_VAL, t->value, err,
                     err_len))
         return -1;

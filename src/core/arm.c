@@ -17,6 +17,8 @@ void qrt_arm_default(struct qrt_arm *arm)
         arm->limit_deg[i][0] = limits[i][0];
         arm->limit_deg[i][1] = limits[i][1];
     }
+    arm->tool_m = 0.0;
+    arm->tool_radius_m = 0.0;
 }
 
 int qrt_arm_validate(const struct qrt_arm *arm)
@@ -37,7 +39,57 @@ int qrt_arm_validate(const struct qrt_arm *arm)
     }
     if (arm->limit_deg[0][0] < -180.0 || arm->limit_deg[0][1] > 180.0)
         return QRT_E_INVALID;
+    if (!isfinite(arm->tool_m) || arm->tool_m < 0.0 || arm->tool_m > 100.0)
+        return QRT_E_INVALID;
+    if (!isfinite(arm->tool_radius_m) || arm->tool_radius_m < 0.0 ||
+        arm->tool_radius_m > 10.0)
+        return QRT_E_INVALID;
+    /* one way to say "no tool": length 0 and radius 0 */
+    if (arm->tool_m == 0.0 && arm->tool_radius_m > 0.0)
+        return QRT_E_INVALID;
     return QRT_OK;
+}
+
+void qrt_arm_tip_arm(const struct qrt_arm *arm, struct qrt_arm *tip_arm)
+{
+    *tip_arm = *arm;
+    tip_arm->link_m[2] = arm->link_m[2] + arm->tool_m;
+    tip_arm->tool_m = 0.0;
+    tip_arm->tool_radius_m = 0.0;
+}
+
+void qrt_arm_collision_arm(const struct qrt_arm *arm,
+                           struct qrt_arm *collision_arm)
+{
+    qrt_arm_tip_arm(arm, collision_arm);
+    /* the tool's capsule (Pe to the tip) and link 3's (P2 to Pe) both lie
+     * in the capsule from P2 to the tip with the larger radius */
+    if (arm->tool_m > 0.0 && arm->tool_radius_m > arm->link_radius_m[2])
+        collision_arm->link_radius_m[2] = arm->tool_radius_m;
+}
+
+double qrt_arm_reach_m(const struct qrt_arm *arm)
+{
+    struct qrt_arm c;
+    double rmax = 0.0;
+    int k;
+    qrt_arm_collision_arm(arm, &c);
+    for (k = 0; k < 3; k++)
+        if (c.link_radius_m[k] > rmax)
+            rmax = c.link_radius_m[k];
+    return c.link_m[0] + c.link_m[1] + c.link_m[2] + rmax;
+}
+
+void qrt_arm_tool_tip(const struct qrt_arm *arm, const double joints_deg[3],
+                      double tip_m[3])
+{
+    struct qrt_arm t;
+    double p[4][3];
+    qrt_arm_tip_arm(arm, &t);
+    qrt_arm_fk(&t, joints_deg, p);
+    tip_m[0] = p[3][0];
+    tip_m[1] = p[3][1];
+    tip_m[2] = p[3][2];
 }
 
 int qrt_arm_alpha_wraps(const struct qrt_arm *arm)

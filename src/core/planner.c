@@ -31,18 +31,12 @@ static void copy_joints(double dst[3], const double src[3])
     dst[2] = src[2];
 }
 
-static double arm_reach(const struct qrt_arm *arm)
-{
-    return arm->link_m[0] + arm->link_m[1] + arm->link_m[2];
-}
-
 int qrt_planner_init_abi(struct qrt_planner *pl,
                          const struct qrt_params *params,
                          const struct qrt_abi *caller)
 {
     const struct qrt_arm *arm = &params->arm;
-    double rmax;
-    int rc, k;
+    int rc;
     /* First, before *pl is touched: a caller compiled with other settings
      * has a struct qrt_planner of another size and layout, and writing this
      * library's into it would run past its end (planner.h, struct
@@ -61,11 +55,9 @@ int qrt_planner_init_abi(struct qrt_planner *pl,
     if (rc != QRT_OK)
         return rc;
     pl->params = *params;
-    rmax = 0.0;
-    for (k = 0; k < 3; k++)
-        if (arm->link_radius_m[k] > rmax)
-            rmax = arm->link_radius_m[k];
-    qrt_points_reset(&pl->points, arm_reach(arm) + rmax + params->margin_m);
+    qrt_arm_collision_arm(arm, &pl->collision_arm);
+    /* the tool's reach too: a point only the tool can touch is kept */
+    qrt_points_reset(&pl->points, qrt_arm_reach_m(arm) + params->margin_m);
     pl->mask_state = QRT_MASK_NONE;
     pl->cells_blocked = 0;
     pl->lazy_clusters = 0;
@@ -100,10 +92,11 @@ static void raster_cluster(void *ctx, const int32_t *members, int m)
     qrt_raster_cluster(c->raster, &c->ax, members, m);
 }
 
-/* Link k's collision radius for the points now in the table. */
+/* Link k's collision radius (the collision arm's) for the points now in
+ * the table. */
 static double points_radius(const struct qrt_planner *pl, int k)
 {
-    return pl->params.arm.link_radius_m[k] + pl->params.margin_m +
+    return pl->collision_arm.link_radius_m[k] + pl->params.margin_m +
            qrt_points_inflation_m(&pl->points);
 }
 
@@ -133,7 +126,7 @@ static void raster_part(struct qrt_planner *pl, int part, int nparts,
     struct qrt_raster r;
     int32_t *scratch;
     long i;
-    qrt_raster_setup(&r, &pl->mask, &pl->params.arm, pl->radius_m,
+    qrt_raster_setup(&r, &pl->mask, &pl->collision_arm, pl->radius_m,
                      pl->params.cspace_margin_deg, part, nparts);
     if (rows)
         qrt_raster_only_rows(&r, rows);
@@ -203,9 +196,9 @@ int qrt_planner_build_mask(struct qrt_planner *pl)
  * joint turns by that margin. */
 static double cspace_shift_m(const struct qrt_planner *pl)
 {
-    const double *l = pl->params.arm.link_m;
+    const double *l = pl->collision_arm.link_m; /* the tool's length too */
     return pl->params.cspace_margin_deg * QRT_DEG *
-           (arm_reach(&pl->params.arm) + (l[1] + l[2]) + l[2]);
+           ((l[0] + l[1] + l[2]) + (l[1] + l[2]) + l[2]);
 }
 
 /* Collision radii for checks against the points now in the table: the
@@ -259,7 +252,7 @@ static void try_end(struct qrt_planner *pl, const double q[3], int ijk[3],
             return;
     qrt_lattice_joints(lat, ijk, node_deg);
     if (!motion_free(pl, q, node_deg) &&
-        !qrt_motion_free_exact(&pl->params.arm, radius, &pl->points, lat, q,
+        !qrt_motion_free_exact(&pl->collision_arm, radius, &pl->points, lat, q,
                                node_deg, QRT_EXACT_MAX_STEPS,
                                QRT_WITNESS_AFTER))
         return;
@@ -330,25 +323,63 @@ enum end_outcome {
     END_STRANDED
 };
 
-/* The clearance of q by the rule itself, from the table's exact points
- * (the caller checks that they are exact): each radius less the float
- * rounding of the stored points, so that a value <= 0 is a collision of
- * the points as given; the rounding added back, so the value is theirs
- * to within it. */
+/* The clearance of the tool's capsule (the segment from Pe to the tip,
+ * radius tool_radius) at q from the n points xyz, or from the table's
+ * points when xyz is NULL; 1e30 without a tool or points. */
+static double tool_clearance(const struct qrt_planner *pl, const double q[3],
+                             double tool_radius, const double *xyz, long n)
+{
+    const struct qrt_arm *arm = &pl->params.arm;
+    struct qrt_point_axes ax = qrt_points_axes(&pl->points);
+    double p[4][3], tip[3], best = 1e30;
+    long i;
+    if (arm->tool_m <= 0.0)
+        return best;
+    if (xyz == NULL)
+        n = pl->points.count;
+    qrt_arm_fk(arm, q, p);
+    qrt_arm_tool_tip(arm, q, tip);
+    for (i = 0; i < n; i++) {
+        double x[3], c;
+        if (xyz == NULL)
+            qrt_point_at(&ax, i, x);
+        else {
+            x[0] = xyz[3 * i];
+            x[1] = xyz[3 * i + 1];
+            x[2] = xyz[3 * i + 2];
+        }
+        c = sqrt(qrt_seg_dist2(x, p[3], tip)) - tool_radius;
+        if (c < best)
+            best = c;
+    }
+    return best;
+}
+
+/* The clearance of q by the rule itself (the links' and the tool's own
+ * capsules, not the collision arm's), from the table's exact points (the
+ * caller checks that they are exact): each radius less the float rounding
+ * of the stored points, so that a value <= 0 is a collision of the points
+ * as given; the rounding added back, so the value is theirs to within
+ * it. */
 static double exact_clearance(const struct qrt_planner *pl, const double q[3])
 {
-    double radius[3], rounding = qrt_points_inflation_m(&pl->points);
+    double radius[3], rounding = qrt_points_inflation_m(&pl->points), c, t;
     int k;
     for (k = 0; k < 3; k++)
         radius[k] =
             pl->params.arm.link_radius_m[k] + pl->params.margin_m - rounding;
-    return qrt_clearance(&pl->params.arm, radius, &pl->points, q) - rounding;
+    c = qrt_clearance(&pl->params.arm, radius, &pl->points, q);
+    t = tool_clearance(
+        pl, q, pl->params.arm.tool_radius_m + pl->params.margin_m - rounding,
+        NULL, 0);
+    return (t < c ? t : c) - rounding;
 }
 
 /* The joints a start or goal may take, nearest to ref first, with the IK
  * branch of each in branch_of: the target's own for joints ({ANY, ANY}),
- * for an end-effector point every IK solution of a branch the target
- * allows. Returns how many (0: none inside the reach, limits and branch). */
+ * for an end-effector point (or a tool tip's, solved on the tip arm) every
+ * IK solution of a branch the target allows. Returns how many (0: none
+ * inside the reach, limits and branch). */
 static int end_joints(const struct qrt_planner *pl, const struct qrt_target *t,
                       const double ref[3], double out[4][3],
                       struct qrt_ik_branch branch_of[4])
@@ -362,7 +393,14 @@ static int end_joints(const struct qrt_planner *pl, const struct qrt_target *t,
         branch_of[0].elbow = QRT_ELBOW_ANY;
         return 1;
     }
-    all = qrt_arm_ik_branches(&pl->params.arm, t->value, ref[0], sols, found);
+    if (t->kind == QRT_TARGET_TOOL_TIP) {
+        struct qrt_arm tip_arm;
+        qrt_arm_tip_arm(&pl->params.arm, &tip_arm);
+        all = qrt_arm_ik_branches(&tip_arm, t->value, ref[0], sols, found);
+    } else {
+        all =
+            qrt_arm_ik_branches(&pl->params.arm, t->value, ref[0], sols, found);
+    }
     /* the branches not asked for are dropped before today's order picks */
     n = 0;
     for (i = 0; i < all; i++) {
@@ -414,7 +452,7 @@ resolve_end(struct qrt_planner *pl, const struct qrt_target *t,
         const double *s = sols[i];
         /* a free cell proves s free; only near obstacles measure it */
         if (!motion_free(pl, s, s) &&
-            qrt_clearance(&pl->params.arm, radius, &pl->points, s) <= 0.0)
+            qrt_clearance(&pl->collision_arm, radius, &pl->points, s) <= 0.0)
             continue;
         any_free = 1;
         collect_ends(pl, s, ends);
@@ -443,7 +481,8 @@ resolve_end(struct qrt_planner *pl, const struct qrt_target *t,
 static int check_target(const struct qrt_arm *arm, const struct qrt_target *t)
 {
     int k;
-    if (t->kind != QRT_TARGET_JOINTS && t->kind != QRT_TARGET_XYZ)
+    if (t->kind != QRT_TARGET_JOINTS && t->kind != QRT_TARGET_XYZ &&
+        t->kind != QRT_TARGET_TOOL_TIP)
         return QRT_E_INVALID;
     for (k = 0; k < 3; k++)
         if (!isfinite(t->value[k]))
@@ -647,11 +686,13 @@ static const char *branch_detail(enum end_outcome o, int is_goal,
 
 /* The detail of an end that failed; for a target that asks for an IK
  * branch, the sentence names that branch. merged: the table holds merged
- * points (END_UNPROVEN cannot say whether the end is clear). */
+ * points (END_UNPROVEN cannot say whether the end is clear); tool: the arm
+ * has one, whose collision capsule (qrt_arm_collision_arm) is wider than
+ * the rule's. */
 static const char *end_detail(enum end_outcome o, int is_goal,
-                              const struct qrt_target *t, int merged)
+                              const struct qrt_target *t, int merged, int tool)
 {
-    if (o != END_OK && o != END_UNPROVEN && t->kind == QRT_TARGET_XYZ &&
+    if (o != END_OK && o != END_UNPROVEN && t->kind != QRT_TARGET_JOINTS &&
         (t->ik.facing != QRT_FACING_ANY || t->ik.elbow != QRT_ELBOW_ANY))
         return branch_detail(o, is_goal, &t->ik);
     switch (o) {
@@ -669,6 +710,13 @@ static const char *end_detail(enum end_outcome o, int is_goal,
                            : "start cannot be proved free under point "
                              "merging; only the exact points can tell "
                              "whether it collides";
+        if (tool)
+            return is_goal ? "goal is clear of the points, but not by the "
+                             "C-space margin, rounding and tool capsule the "
+                             "planner adds, so cannot be proved free"
+                           : "start is clear of the points, but not by the "
+                             "C-space margin, rounding and tool capsule the "
+                             "planner adds, so cannot be proved free";
         return is_goal ? "goal is clear of the points, but not by the "
                          "C-space margin and rounding the planner adds, so "
                          "cannot be proved free"
@@ -713,7 +761,7 @@ static int plan_swept(struct qrt_planner *pl, const struct qrt_target *start,
         end_joints(pl, goal, qs[0], qg, bg) == 0)
         return 0;
     exact_radii(pl, radius);
-    if (!qrt_sweep_free(&pl->params.arm, radius, &pl->points, &pl->mask.lat,
+    if (!qrt_sweep_free(&pl->collision_arm, radius, &pl->points, &pl->mask.lat,
                         qs[0], qg[0], pl->search.sweep))
         return 0;
     reset_plan(pl, plan);
@@ -749,7 +797,7 @@ static int lazy_start(struct qrt_planner *pl, struct qrt_raster *r)
     int kept = pl->mask_state == QRT_MASK_PARTIAL;
     if (!kept)
         start_mask(pl);
-    qrt_raster_setup(r, &pl->mask, &pl->params.arm, pl->radius_m,
+    qrt_raster_setup(r, &pl->mask, &pl->collision_arm, pl->radius_m,
                      pl->params.cspace_margin_deg, 0, 1);
     if (kept) { /* the same points: go on from the rows already built */
         qrt_lazy_resume(pl, r);
@@ -854,6 +902,7 @@ static void plan_on_mask(struct qrt_planner *pl, const struct qrt_target *start,
     struct qrt_ik_branch bs, bg;
     long len;
     int merged = pl->points.voxel_m > 0.0;
+    int tool = pl->params.arm.tool_m > 0.0;
 
     reset_plan(pl, plan);
     if (pl->points.dropped > 0) {
@@ -870,7 +919,8 @@ static void plan_on_mask(struct qrt_planner *pl, const struct qrt_target *start,
     }
     if (o != END_OK) {
         plan->end_free = o == END_STRANDED;
-        set_status(plan, end_status(o, 0), end_detail(o, 0, start, merged));
+        set_status(plan, end_status(o, 0),
+                   end_detail(o, 0, start, merged, tool));
         return;
     }
     o = resolve_end(pl, goal, qs, qg, &bg, &goals, &plan->end_measured,
@@ -881,7 +931,8 @@ static void plan_on_mask(struct qrt_planner *pl, const struct qrt_target *start,
     }
     if (o != END_OK) {
         plan->end_free = o == END_STRANDED;
-        set_status(plan, end_status(o, 1), end_detail(o, 1, goal, merged));
+        set_status(plan, end_status(o, 1),
+                   end_detail(o, 1, goal, merged, tool));
         return;
     }
 
@@ -992,12 +1043,12 @@ static int segment_blocked(const struct qrt_planner *pl, const double a[3],
     if (qrt_motion_free_on_mask_hit(&pl->mask, a, b, &t_hit))
         return 0;
     exact_radii(pl, radius);
-    if (qrt_motion_collides_at(&pl->params.arm, radius, &pl->points,
+    if (qrt_motion_collides_at(&pl->collision_arm, radius, &pl->points,
                                &pl->mask.lat, a, b, t_hit) ||
-        qrt_motion_collides_at(&pl->params.arm, radius, &pl->points,
+        qrt_motion_collides_at(&pl->collision_arm, radius, &pl->points,
                                &pl->mask.lat, a, b, 1.0))
         return 1;
-    return !qrt_motion_free_exact(&pl->params.arm, radius, &pl->points,
+    return !qrt_motion_free_exact(&pl->collision_arm, radius, &pl->points,
                                   &pl->mask.lat, a, b, QRT_EXACT_MAX_STEPS,
                                   QRT_WITNESS_AFTER);
 }
@@ -1092,5 +1143,11 @@ double qrt_planner_clearance(const struct qrt_planner *pl,
             if (c < best)
                 best = c;
         }
+    {
+        double t = tool_clearance(
+            pl, q_deg, arm->tool_radius_m + pl->params.margin_m, xyz, n);
+        if (t < best)
+            best = t;
+    }
     return best;
 }

@@ -325,8 +325,7 @@ void Daemon::ingest(std::map<std::string, PendingScan> &scans, Picture *picture,
                     bool report, long *invalid)
 {
     const qrt_arm &arm = opts_.params.arm;
-    const double reach =
-        arm_reach_m(arm.link_m, arm.link_radius_m, opts_.params.margin_m);
+    const double reach = arm_reach_m(arm, opts_.params.margin_m);
     for (auto &kv : scans) {
         ScanPoints sp;
         std::string why =
@@ -560,7 +559,7 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
     if (end_check_measured(&plan)) {
         end_check_detail(
             &plan, plan.status == QRT_STATUS_GOAL_BLOCKED ? &goal : &start,
-            opts_.params.cspace_margin_deg, detail, sizeof detail);
+            &opts_.params, detail, sizeof detail);
         plan.detail = detail;
     }
     last_plan_ok_ = plan.status == QRT_STATUS_OK;
@@ -991,12 +990,14 @@ int Daemon::run(const RunFlags &flags)
     const qrt_arm &arm = opts_.params.arm;
     log(LogLevel::info,
         "arm: links %g,%g,%g m, radii %g,%g,%g m, limits %g..%g %g..%g "
-        "%g..%g deg; grid %g deg, margin %g m, C-space margin %g deg",
+        "%g..%g deg; tool %g m, radius %g m; grid %g deg, margin %g m, "
+        "C-space margin %g deg",
         arm.link_m[0], arm.link_m[1], arm.link_m[2], arm.link_radius_m[0],
         arm.link_radius_m[1], arm.link_radius_m[2], arm.limit_deg[0][0],
         arm.limit_deg[0][1], arm.limit_deg[1][0], arm.limit_deg[1][1],
-        arm.limit_deg[2][0], arm.limit_deg[2][1], opts_.params.grid_deg,
-        opts_.params.margin_m, opts_.params.cspace_margin_deg);
+        arm.limit_deg[2][0], arm.limit_deg[2][1], arm.tool_m, arm.tool_radius_m,
+        opts_.params.grid_deg, opts_.params.margin_m,
+        opts_.params.cspace_margin_deg);
     if (!start_auth())
         return 2;
     if (!opts_.can_iface.empty()) {

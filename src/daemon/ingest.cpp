@@ -74,12 +74,9 @@ std::string check_scan(const qrtplan::range_scan_t &s, long max_returns)
     return "";
 }
 
-double arm_reach_m(const double link_m[3], const double link_radius_m[3],
-                   double margin_m)
+double arm_reach_m(const qrt_arm &arm, double margin_m)
 {
-    double radius = std::max(link_radius_m[0],
-                             std::max(link_radius_m[1], link_radius_m[2]));
-    return link_m[0] + link_m[1] + link_m[2] + radius + margin_m;
+    return qrt_arm_reach_m(&arm) + margin_m;
 }
 
 std::string scan_to_points(const qrtplan::range_scan_t &s, long max_returns,

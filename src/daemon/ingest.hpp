@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "qrtplan/arm.h"
 #include "qrtplan/range_scan_t.hpp"
 
 namespace qrt
@@ -54,10 +55,10 @@ std::string scan_to_points(const qrtplan::range_scan_t &scan, long max_returns,
                            double reach_m, ScanPoints *out);
 
 // How far from the base origin an obstacle point can matter: every point
-// of the arm lies within the sum of the link lengths of the origin, its
-// surface a link radius beyond, and the margin beyond that.
-double arm_reach_m(const double link_m[3], const double link_radius_m[3],
-                   double margin_m);
+// of the arm lies within the sum of the link and tool lengths of the
+// origin, its surface a radius beyond (qrt_arm_reach_m), and the margin
+// beyond that.
+double arm_reach_m(const qrt_arm &arm, double margin_m);
 
 // The obstacle picture: the newest scan of each sensor, or every scan of
 // the last window_s seconds (by the daemon's clock), bounded in scans per

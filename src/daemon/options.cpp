@@ -72,6 +72,11 @@ const char *kUsage =
     "                           (docs/spec.md section Arm: 0.09,0.332,0.538)\n"
     "  --link-radius M[,M2,M3]  the links' radii, metres: one for every\n"
     "                           link, or one each (0.02)\n"
+    "  --tool-length-m M        a tool on link 3 beyond the end effector,\n"
+    "                           collinear with it, checked like the links\n"
+    "                           (docs/spec.md section Arm; 0: none)\n"
+    "  --tool-radius-m M        the tool's capsule radius, metres (0; above\n"
+    "                           0 only with a tool length)\n"
     "  --limits-deg a0,a1,s0,s1,e0,e1  the joint limits the plans keep\n"
     "                           to and the drives are held to (docs/spec.md\n"
     "                           section Arm: -180,180,-40,180,-180,140;\n"
@@ -245,6 +250,14 @@ bool apply(Options *o, const std::string &key, const std::string &value,
             return bad("three lengths L1,L2,L3 in metres, each in 0.001..10");
         for (int j = 0; j < 3; j++)
             o->params.arm.link_m[j] = l[j];
+    } else if (key == "tool-length-m") {
+        if (!number(0, 10))
+            return bad("metres in 0..10 (0: no tool)");
+        o->params.arm.tool_m = v;
+    } else if (key == "tool-radius-m") {
+        if (!number(0, 0.5))
+            return bad("metres in 0..0.5");
+        o->params.arm.tool_radius_m = v;
     } else if (key == "limits-deg") {
         if (!parse_limits_deg(value, o->params.arm.limit_deg))
             return bad(kLimitsDegWanted);
@@ -405,6 +418,12 @@ int parse_options(int argc, char **argv, Options *o, std::string *error)
         }
         if (!apply(o, key, args[++i], error))
             return 2;
+    }
+    // one way to say "no tool" (qrt_arm_validate): length 0, radius 0
+    if (o->params.arm.tool_m == 0.0 && o->params.arm.tool_radius_m > 0.0) {
+        *error = "--tool-radius-m needs --tool-length-m above 0 (a tool of "
+                 "length 0 is no tool)";
+        return 2;
     }
     // the drives are held to the joint limits the plans are made within
     for (int j = 0; j < 3; j++)

@@ -201,6 +201,35 @@ def test_each_links_radius_from_the_options(daemon):
         assert p.status == status, (radii, p.status, p.detail)
 
 
+def test_a_tool_from_the_options(daemon):
+    """--tool-length-m and --tool-radius-m (docs/spec.md §Arm, Tool): a
+    point 1.05 m out on the straight arm's line at alpha 0, beyond the links'
+    reach (0.99 m with radius and margin) but on the tool. Without the tool
+    it is dropped as out of reach and the plan from alpha -60 to 60 sweeps
+    straight through it;
+    with it, it is kept (the reach counts the tool) and the plan goes
+    round, safe by the oracle given the tool."""
+    point = [1.05, 0.0, 0.0]
+    scene = {"arm": {"tool": {"length_m": 0.15, "radius_m": 0.02}},
+             "start": {"joints_deg": [-60, 0, 0]},
+             "goal": {"joints_deg": [60, 0, 0]}}
+    for flags, kept in (((), 0),
+                        (("--tool-length-m", "0.15", "--tool-radius-m",
+                          "0.02"), 1)):
+        d, c = daemon(*flags)
+        c.publish("QRT_SCAN", scan_from_points([point]))
+        c.publish("QRT_PLAN_REQUEST", request([60, 0, 0], start=[-60, 0, 0]))
+        p = c.wait_plan()
+        assert p is not None, d.text()
+        assert p.status == "ok", (flags, p.status, p.detail)
+        assert p.points == kept, (flags, p.points)
+        res = oracle.check_path(scene, {
+            "status": p.status,
+            "waypoints_deg": [list(w) for w in p.waypoints_deg],
+            "cost_deg": p.cost_deg}, np.array([point]))
+        assert res.safe == bool(kept), (flags, str(res))
+
+
 def test_the_log_says_what_the_daemon_made_of_its_options(daemon):
     """Per-joint values reach the arm and the drives' settings one by one
     (no bus here: the daemon reports it and retries; its log still shows
@@ -458,7 +487,10 @@ def test_help_and_bad_flags():
                        ("--limits-deg", "-180,180,-40,180,-180"),
                        ("--limits-deg", "-180,180,40,-40,-180,140"),
                        ("--limits-deg", "-180,180,-40,181,-180,140"),
-                       ("--limits-deg", "-180,180,-40,nan,-180,140")):
+                       ("--limits-deg", "-180,180,-40,nan,-180,140"),
+                       ("--tool-length-m", "-0.1"), ("--tool-length-m", "nan"),
+                       ("--tool-length-m", "11"), ("--tool-radius-m", "0.6"),
+                       ("--tool-radius-m", "-1")):
         r = subprocess.run([DAEMON, key, value, "--help"], capture_output=True,
                            text=True)
         assert r.returncode == 2 and key[2:] + ":" in r.stderr, (key, r.stderr)
@@ -466,6 +498,11 @@ def test_help_and_bad_flags():
                         "--max-returns", "7", "--help"],
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
+    # one way to say "no tool": a radius needs a length
+    r = subprocess.run([DAEMON, "--tool-radius-m", "0.02"],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and "--tool-radius-m needs --tool-length-m" in \
+        r.stderr, r.stderr
 
 
 def test_config_file_and_flags(daemon, tmp_path):

@@ -73,11 +73,11 @@ def test_malformed_json(qrtplan, tmp_path, text, words):
     (with_(arm={"limits_deg": [[-180, 180], [90, 0], [-180, 140]]}), ["limits"]),
     # an unknown field is named, and so is every valid one
     (with_(arm={"elbow": 1}),
-     ['"elbow" in arm (valid: links_m, link_radius_m, limits_deg)']),
+     ['"elbow" in arm (valid: links_m, link_radius_m, limits_deg, tool)']),
     (with_(colour="red"),
      ['"colour" in the scene (valid: version, name, comment, arm, margin_m, '
       'cspace_margin_deg, grid_deg, points, points_file, start, goal)']),
-    (with_(start={"joints": [0, 0, 0]}), ['"joints" in start (valid: joints_deg, xyz_m, ik)']),
+    (with_(start={"joints": [0, 0, 0]}), ['"joints" in start (valid: joints_deg, xyz_m, ik, aim)']),
     (with_(start={"joints_deg": [0, -60, 0]}), ["outside the joint limits"]),
     (with_(goal={"joints_deg": [0, 0, 150]}), ["outside the joint limits"]),
     (with_(start={"joints_deg": [190, 0, 0]}), ["outside the joint limits"]),

@@ -123,6 +123,9 @@ STATUS_SCENES = [
     ("ok", {"points": [], "version": 1.0,
             "arm": {"limits_deg": [[-170, 170], [-40, 180], [-180, 140]]},
             "grid_deg": 10, "margin_m": 0, "cspace_margin_deg": 2}),
+    ("ok", {"arm": {"tool": {"length_m": 0.1, "radius_m": 0.03}},
+            "goal": {"xyz_m": [-0.16, 0.93, 0.0], "aim": "tool_tip",
+                     "ik": {"facing": "front"}}}),
     ("start_blocked", {"start": {"joints_deg": [180, 0, 0]}}),
     ("goal_blocked", {"goal": {"joints_deg": [180, 0, 0]}}),
     ("unreachable", {"goal": {"xyz_m": [2.0, 0.0, 0.0]}}),
@@ -211,6 +214,15 @@ BAD_SCENES = [
     (["goal"], {"xyz_m": [0.6, 0, 0.45], "ik": {"wrist": "up"}}),
     (["goal"], {"xyz_m": [0.6, 0, 0.45], "ik": "front"}),
     (["start"], {"joints_deg": [-100, 0, 0], "ik": {"facing": "front"}}),
+    # a tool on the arm, and what a target's point is for
+    (["arm", "tool"], {"length_m": -0.1, "radius_m": 0.02}),
+    (["arm", "tool"], {"length_m": 0.1, "radius_m": -0.02}),
+    (["arm", "tool"], {"length_m": "NaN", "radius_m": 0.02}),
+    (["arm", "tool"], {"length_m": 0.1}),
+    (["arm", "tool"], {"length_m": 0.1, "radius_m": 0.02, "mass_kg": 1}),
+    (["arm", "tool"], 0.1),
+    (["goal"], {"xyz_m": [0.6, 0, 0.45], "aim": "tip"}),
+    (["start"], {"joints_deg": [-100, 0, 0], "aim": "tool_tip"}),
 ]
 
 

@@ -174,14 +174,14 @@ struct VoxelIndex {
 };
 
 struct Checker {
-    const qrt_arm *arm;
+    qrt_arm arm; // the collision arm (qrt_arm_collision_arm): links, tool
     double radius[3];
     VoxelIndex index;
 
     bool free(double a, double s, double e) const
     {
         double p[4][3] = {{0, 0, 0}};
-        const double *l = arm->link_m;
+        const double *l = arm.link_m;
         p[1][0] = l[0] * std::cos(a);
         p[1][1] = l[0] * std::sin(a);
         p[2][0] = p[1][0] + l[1] * std::cos(s) * std::cos(a);
@@ -242,9 +242,9 @@ std::vector<double> scan_before(const double *xyz, long n)
 Checker checker_for(const scene &sc, const double *xyz, long n)
 {
     Checker chk;
-    chk.arm = &sc.params.arm;
+    qrt_arm_collision_arm(&sc.params.arm, &chk.arm);
     for (int k = 0; k < 3; k++)
-        chk.radius[k] = sc.params.arm.link_radius_m[k] + sc.params.margin_m;
+        chk.radius[k] = chk.arm.link_radius_m[k] + sc.params.margin_m;
     chk.index.build(xyz, n);
     return chk;
 }
