@@ -341,9 +341,9 @@ static double tool_clearance(const struct qrt_planner *pl, const double q[3],
     qrt_arm_tool_tip(arm, q, tip);
     for (i = 0; i < n; i++) {
         double x[3], c;
-        if (xyz == NULL)
+        if (xyz == NULL) {
             qrt_point_at(&ax, i, x);
-        else {
+        } else {
             x[0] = xyz[3 * i];
             x[1] = xyz[3 * i + 1];
             x[2] = xyz[3 * i + 2];
@@ -902,7 +902,6 @@ static void plan_on_mask(struct qrt_planner *pl, const struct qrt_target *start,
     struct qrt_ik_branch bs, bg;
     long len;
     int merged = pl->points.voxel_m > 0.0;
-    int tool = pl->params.arm.tool_m > 0.0;
 
     reset_plan(pl, plan);
     if (pl->points.dropped > 0) {
@@ -919,8 +918,9 @@ static void plan_on_mask(struct qrt_planner *pl, const struct qrt_target *start,
     }
     if (o != END_OK) {
         plan->end_free = o == END_STRANDED;
-        set_status(plan, end_status(o, 0),
-                   end_detail(o, 0, start, merged, tool));
+        set_status(
+            plan, end_status(o, 0),
+            end_detail(o, 0, start, merged, pl->params.arm.tool_m > 0.0));
         return;
     }
     o = resolve_end(pl, goal, qs, qg, &bg, &goals, &plan->end_measured,
@@ -932,7 +932,7 @@ static void plan_on_mask(struct qrt_planner *pl, const struct qrt_target *start,
     if (o != END_OK) {
         plan->end_free = o == END_STRANDED;
         set_status(plan, end_status(o, 1),
-                   end_detail(o, 1, goal, merged, tool));
+                   end_detail(o, 1, goal, merged, pl->params.arm.tool_m > 0.0));
         return;
     }
 
