@@ -280,6 +280,12 @@ def test_oracle_reads_the_tool(tmp_path):
         plan = {"status": "ok", "waypoints_deg": wps,
                 "cost_deg": oracle.path_length(oracle.Arm(s), wps)}
         assert oracle.check_path(s, plan, pts).safe == safe
+    # a tool length or radius that is not finite: never called safe
+    for tool in ({"length_m": float("nan"), "radius_m": 0.02},
+                 {"length_m": 0.3, "radius_m": float("nan")},
+                 {"length_m": float("inf"), "radius_m": 0.02}):
+        s = dict(bare, arm={"tool": tool})
+        assert not oracle.check_path(s, plan, pts).safe, tool
     # a tool without its radius: nothing checked, nothing called safe
     path, plan_path = tmp_path / "scene.json", tmp_path / "plan.json"
     path.write_text(json.dumps(dict(scene, arm={"tool": {"length_m": 0.1}})))
