@@ -286,6 +286,81 @@ def check_branch(arm, name, target, q_end, reported, problems):
                             f"{measured[i]}")
 
 
+# How far a plan's clearance_m may lie below the least clearance at the
+# samples: the planner's bound is within 4 mm of the true least clearance
+# (docs/spec.md section Clearance), and between samples 0.1 degrees apart
+# the arm moves at most ~1.8 mm a metre of reach, half of which the true
+# least clearance may lie below the least sample.
+CLEARANCE_BELOW_M = 0.005
+
+
+def refined_least(arm, q, pts, claim, around=4, finer=100):
+    """The least clearance along the sampled path q (margin subtracted):
+    the samples' least, then the motion between the neighbours of the
+    `around` least samples sampled `finer` times more densely, so that a
+    bound which misses a dip between its own samples is caught."""
+    c = clearances(arm, q, pts, reach=claim + 0.05)
+    least = float(c.min())
+    for i in np.argsort(c)[:around]:
+        lo, hi = max(i - 1, 0), min(i + 1, len(q) - 1)
+        if hi == lo:
+            continue
+        d = q[hi] - q[lo]
+        if arm.alpha_wraps:
+            d[0] = wrap180(d[0])
+        t = np.linspace(0.0, 1.0, 2 * finer + 1)[:, None]
+        fine = clearances(arm, q[lo][None, :] + t * d[None, :], pts,
+                          reach=claim + 0.05)
+        least = min(least, float(fine.min()))
+    return least
+
+
+def check_clearance(arm, q, pts, sampled, plan, problems):
+    """A plan's clearance_m (margin not subtracted) is a lower bound on the
+    least clearance along the path and at least the margin. Where the
+    points are exact, it is within CLEARANCE_BELOW_M of the least clearance
+    to the points the planner keeps (|p| <= the arm's reach plus its
+    largest radius plus the margin), or of the bound it gives the others
+    (their least |p| less the arm's reach plus its largest radius), which
+    ever is less (docs/spec.md section Clearance). null only when no point
+    is given."""
+    claim = plan["clearance_m"]
+    if claim is None:
+        if len(pts):
+            problems.append("clearance_m is null but the scene has points")
+        return
+    if not (isinstance(claim, numbers.Real) and math.isfinite(claim)):
+        problems.append(f"clearance_m {claim!r} is not a finite number")
+        return
+    if not claim >= arm.margin:
+        problems.append(f"clearance_m {claim} is below the margin {arm.margin}")
+    if not len(pts):
+        problems.append(f"clearance_m {claim} but the scene has no points")
+        return
+    least = refined_least(arm, q, pts, claim) + arm.margin
+    if claim > least + 1e-6:
+        problems.append(f"clearance_m {claim:.6f} is above the least "
+                        f"clearance along the path, {least:.6f} m")
+    if plan.get("stats", {}).get("voxel_m", 0) != 0:
+        return  # merged points: a bound, how close is not promised
+    length = (sum(arm.links) + arm.tool_length +
+              max(*arm.radii, arm.tool_radius))
+    norms = np.linalg.norm(pts, axis=1)
+    kept = pts[norms <= length + arm.margin]
+    promised = math.inf
+    if len(kept):
+        c = clearances(arm, q, kept, reach=claim + 0.05)
+        promised = float(c.min()) + arm.margin
+    if (norms > length + arm.margin).any():
+        promised = min(promised,
+                       float(norms[norms > length + arm.margin].min()) - length)
+    if claim < promised - CLEARANCE_BELOW_M:
+        problems.append(f"clearance_m {claim:.6f} is more than "
+                        f"{CLEARANCE_BELOW_M * 1000:g} mm below {promised:.6f} "
+                        f"m (the least clearance along the path, its kept "
+                        f"points or the far points' bound)")
+
+
 def check_path(scene, plan, points):
     """Check an ok plan against its scene. Returns a Result."""
     arm = Arm(scene)
@@ -326,6 +401,8 @@ def check_path(scene, plan, points):
     if len(hit):
         res.problems.append(f"collision at sample {hit[0]} {q[hit[0]].tolist()}: "
                             f"clearance {c[hit[0]]:.5f} m")
+    if "clearance_m" in plan:
+        check_clearance(arm, q, pts, res.min_clearance, plan, res.problems)
     start, goal = scene["start"], scene["goal"]
     for name, target, q_end in (("start", start, wps[0]), ("goal", goal, wps[-1])):
         if "joints_deg" in target:

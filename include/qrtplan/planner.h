@@ -130,7 +130,12 @@ struct qrt_plan {
      * (docs/spec.md section Statuses). */
     int end_free, end_measured;
     double end_clearance_m;
+    /* 0 until qrt_planner_certify_clearance sets it on an ok plan */
+    double clearance_m;
 };
+
+/* clearance_m of a plan when no point is in the table. */
+#define QRT_CLEARANCE_NONE_M 1e9
 
 /* struct qrt_planner holds all state; its size is fixed at compile time by
  * qrtplan/config.h. Its fields are not API (qrtplan/planner_internal.h):
@@ -240,6 +245,20 @@ int qrt_planner_check_path(const struct qrt_planner *pl,
 int qrt_planner_check_path_now(struct qrt_planner *pl,
                                const double (*waypoints_deg)[3], int n,
                                int *first_blocked);
+
+/* Certify an ok plan's clearance, in plan->clearance_m: a lower bound on
+ * the least distance over its whole motion between the arm's own capsules
+ * (links and tool at their radii, the margin not subtracted) and the
+ * points given, at least the margin (the path's proof gives that much),
+ * within 4 mm of the true least distance where the points are exact and
+ * the nearest is in reach (docs/spec.md section Guarantee, Clearance);
+ * QRT_CLEARANCE_NONE_M when no point was given. Call it with the table the
+ * plan was made on. A separate call because it costs more than a small
+ * plan: a pass over the points for every sample of the motion.
+ * QRT_E_INVALID (plan untouched) for a plan that is not ok. */
+int qrt_planner_certify_clearance(const struct qrt_planner *pl,
+                                  struct qrt_plan *plan);
+
 
 /* The clearance of the arm at joints q_deg from the n points xyz (3n
  * doubles, metres, base frame), with this planner's arm and margin_m: the

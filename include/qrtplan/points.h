@@ -31,6 +31,8 @@ extern "C" {
 #define QRT_POINT_HASH_SLOTS (2L * QRT_MAX_POINTS)
 /* Steps of a merged entry's box along a voxel edge (a byte a bound). */
 #define QRT_VOXEL_BOX_STEPS 255
+/* far_min2 while no point has been ignored. */
+#define QRT_NO_FAR_POINT 1e300
 
 /* The entries are stored by axis, entry i at (x[i], y[i], z[i]): the
  * passes over every point (the intake's reach check, the one-pass proof's
@@ -51,6 +53,7 @@ struct qrt_points {
     long dropped;        /* lost to capacity: non-zero means do not plan */
     double voxel_m;      /* 0 while exact, else the voxel edge in use */
     double reach_m;      /* points farther than this are ignored */
+    double far_min2;     /* least |p|^2 of the ignored points, or 1e300 */
 };
 
 /* Empty the table. reach_m: points with |p| > reach_m are ignored; pass

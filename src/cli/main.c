@@ -394,6 +394,10 @@ static int cmd_plan(int argc, char **argv)
     t.search_us = now_us() - t1;
     if (rc != QRT_OK)
         return fail(scene_name(scene_path), qrt_err_name(rc));
+    t1 = now_us();
+    if (plan.status == QRT_STATUS_OK)
+        (void)qrt_planner_certify_clearance(&planner, &plan);
+    t.certify_us = now_us() - t1;
     measure_blocked_end(scene_path, &sc, max_memory, &plan, detail,
                         sizeof detail);
     out = open_output(out_path);

@@ -63,6 +63,14 @@ void plan_write_json(FILE *out, const struct qrt_plan *plan,
             write_joints(out, plan->waypoints_deg[i]);
         }
         fprintf(out, "\n  ],\n  \"cost_deg\": %.6f,\n", plan->cost_deg);
+        /* null: no point in reach, nothing to be clear of */
+        if (plan->clearance_m >= QRT_CLEARANCE_NONE_M)
+            fprintf(out, "  \"clearance_m\": null,\n");
+        else { /* exactly: a bound rounded up would not be one */
+            fputs("  \"clearance_m\": ", out);
+            write_number(out, plan->clearance_m);
+            fputs(",\n", out);
+        }
     }
     if (plan->status != QRT_STATUS_UNREACHABLE &&
         plan->status != QRT_STATUS_CAPACITY) {
@@ -90,9 +98,9 @@ void plan_write_json(FILE *out, const struct qrt_plan *plan,
     fprintf(out,
             "\"lattice_path_nodes\": %ld, \"start_node\": %ld, "
             "\"goal_node\": %ld,\n    \"time_us\": {\"convert\": %ld, "
-            "\"search\": %ld, \"total\": %ld}}\n}\n",
+            "\"search\": %ld, \"certify\": %ld, \"total\": %ld}}\n}\n",
             plan->lattice_path_nodes, plan->start_node, plan->goal_node,
-            t->convert_us, t->search_us, t->total_us);
+            t->convert_us, t->search_us, t->certify_us, t->total_us);
 }
 
 void mask_write_json(FILE *out, const struct qrt_mask *mask)

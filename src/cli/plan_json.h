@@ -7,7 +7,7 @@
 #include "qrtplan/planner.h"
 
 struct stage_times {
-    long convert_us, search_us, total_us;
+    long convert_us, search_us, certify_us, total_us;
 };
 
 void plan_write_json(FILE *out, const struct qrt_plan *plan,

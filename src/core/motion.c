@@ -174,22 +174,21 @@ static int mark_in_box(const struct qrt_points *pts, long at,
     return count;
 }
 
-double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],
-                            const struct qrt_points *pts, const double q_deg[3],
-                            double cap)
+double qrt_chain_clearance_capped(const double (*p)[3], const double *radius_m,
+                                  int n, const struct qrt_points *pts,
+                                  double cap)
 {
     struct qrt_point_axes ax = qrt_points_axes(pts);
-    double p[4][3], lo[3][3], hi[3][3], arm_lo[3], arm_hi[3], near_lo[3],
-        near_hi[3], best = cap, widest = radius_m[0];
+    double lo[QRT_CHAIN_MAX][3], hi[QRT_CHAIN_MAX][3], arm_lo[3], arm_hi[3],
+        near_lo[3], near_hi[3], best = cap, widest = radius_m[0];
     long i;
     int k, j;
-    qrt_arm_fk(arm, q_deg, p);
-    for (k = 1; k < 3; k++)
+    for (k = 1; k < n; k++)
         if (radius_m[k] > widest)
             widest = radius_m[k];
     for (j = 0; j < 3; j++)
         arm_lo[j] = arm_hi[j] = p[0][j];
-    for (k = 0; k < 3; k++)
+    for (k = 0; k < n; k++)
         for (j = 0; j < 3; j++) {
             lo[k][j] = p[k][j] < p[k + 1][j] ? p[k][j] : p[k + 1][j];
             hi[k][j] = p[k][j] > p[k + 1][j] ? p[k][j] : p[k + 1][j];
@@ -198,9 +197,9 @@ double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],
             if (p[k + 1][j] > arm_hi[j])
                 arm_hi[j] = p[k + 1][j];
         }
-    /* Most points lie far from the whole arm: one box around all three
-     * links, grown by the widest reach a link test below could use now,
-     * turns them away with one test instead of three (grown again only
+    /* Most points lie far from the whole arm: one box around every
+     * capsule, grown by the widest reach a capsule test below could use
+     * now, turns them away with one test instead of n (grown again only
      * when best falls). */
     near_box(arm_lo, arm_hi, best + widest, near_lo, near_hi);
     for (i = 0; i < pts->count; i += QRT_CLEARANCE_BLOCK) {
@@ -222,9 +221,9 @@ double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],
             if (x[0] < near_lo[0] || x[0] > near_hi[0] || x[1] < near_lo[1] ||
                 x[1] > near_hi[1] || x[2] < near_lo[2] || x[2] > near_hi[2])
                 continue;
-            for (k = 0; k < 3; k++) {
-                /* a point farther than best + radius from the link's box
-                 * on some axis cannot lower best: skip the segment
+            for (k = 0; k < n; k++) {
+                /* a point farther than best + radius from the capsule's
+                 * box on some axis cannot lower best: skip the segment
                  * distance */
                 double reach = best + radius_m[k], c;
                 if (x[0] < lo[k][0] - reach || x[0] > hi[k][0] + reach ||
@@ -242,6 +241,16 @@ double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],
         }
     }
     return best;
+}
+
+double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],
+                            const struct qrt_points *pts, const double q_deg[3],
+                            double cap)
+{
+    double p[4][3];
+    qrt_arm_fk(arm, q_deg, p);
+    return qrt_chain_clearance_capped((const double(*)[3])p, radius_m, 3, pts,
+                                      cap);
 }
 
 double qrt_clearance(const struct qrt_arm *arm, const double radius_m[3],

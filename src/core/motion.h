@@ -60,6 +60,18 @@ void qrt_motion_mark_rows(const struct qrt_mask *mask, const double a_deg[3],
 double qrt_clearance(const struct qrt_arm *arm, const double radius_m[3],
                      const struct qrt_points *pts, const double q_deg[3]);
 
+/* Capsules in a chain: capsule k joins p[k] and p[k + 1] (the three links,
+ * and the tool after them). */
+#define QRT_CHAIN_MAX 4
+
+/* min(clearance, cap) of the chain of n <= QRT_CHAIN_MAX capsules p[0..n]
+ * with radii radius_m[0..n-1] against the points (distance minus radius,
+ * metres; points farther than cap from every capsule are skipped); where
+ * a capsule collides, some value <= 0. */
+double qrt_chain_clearance_capped(const double (*p)[3], const double *radius_m,
+                                  int n, const struct qrt_points *pts,
+                                  double cap);
+
 /* min(clearance, cap) where the arm is clear of every point, cheaper than
  * qrt_clearance since points farther than cap from the arm are skipped;
  * where it collides, some value <= 0 (the search stops at the first

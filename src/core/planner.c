@@ -5,6 +5,7 @@
 #include <math.h>
 #include <stddef.h>
 
+#include "clearance.h"
 #include "cluster.h"
 #include "geom.h"
 #include "lazy.h"
@@ -629,6 +630,7 @@ static void reset_plan(const struct qrt_planner *pl, struct qrt_plan *plan)
     plan->voxel_m = pl->points.voxel_m;
     plan->end_free = plan->end_measured = 0;
     plan->end_clearance_m = 0.0;
+    plan->clearance_m = 0.0;
 }
 
 /* The sentence pre BRANCH post, BRANCH naming the IK branch that *ik (a
@@ -1150,4 +1152,21 @@ double qrt_planner_clearance(const struct qrt_planner *pl,
             best = t;
     }
     return best;
+}
+
+int qrt_planner_certify_clearance(const struct qrt_planner *pl,
+                                  struct qrt_plan *plan)
+{
+    double c;
+    if (plan->status != QRT_STATUS_OK || plan->n_waypoints < 1)
+        return QRT_E_INVALID;
+    c = qrt_path_clearance(
+        &pl->params.arm, &pl->collision_arm, &pl->points, &pl->mask.lat,
+        (const double(*)[3])plan->waypoints_deg, plan->n_waypoints);
+    /* never below the margin, which the path's proof already guarantees
+     * (the bound can fall short of the true value by its slack) */
+    if (c < QRT_CLEARANCE_NONE_M && c < pl->params.margin_m)
+        c = pl->params.margin_m;
+    plan->clearance_m = c;
+    return QRT_OK;
 }

@@ -260,6 +260,7 @@ void qrt_points_reset(struct qrt_points *pts, double reach_m)
     pts->voxel_m = 0.0;
     pts->box_radius_m = 0.0;
     pts->reach_m = reach_m;
+    pts->far_min2 = QRT_NO_FAR_POINT;
 }
 
 /* Points are taken in blocks of QRT_INTAKE_BLOCK: a block is first stored and
@@ -299,15 +300,18 @@ static int store_block(struct qrt_points *pts, long at, const double *xyz,
  * QRT_E_INVALID if a coordinate is not finite: only a point not within
  * reach pays for that test. */
 static int keep_near(struct qrt_points *pts, const double *xyz, long m,
-                     double r2, long *count, long *far)
+                     double r2, long *count, long *far, double *far_min2)
 {
     long i, next = *count;
     for (i = 0; i < m; i++) {
         const double *p = xyz + 3 * i;
-        if (!(p[0] * p[0] + p[1] * p[1] + p[2] * p[2] <= r2)) {
+        double d2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
+        if (!(d2 <= r2)) {
             if (!finite_point(p))
                 return QRT_E_INVALID;
             (*far)++;
+            if (d2 < *far_min2)
+                *far_min2 = d2;
             continue;
         }
         store_point(pts, next, p);
@@ -324,7 +328,7 @@ static int keep_near(struct qrt_points *pts, const double *xyz, long m,
 static int add_exact(struct qrt_points *pts, const double *xyz, long n)
 {
     long count = pts->count, far = 0, i;
-    double r2 = pts->reach_m * pts->reach_m;
+    double r2 = pts->reach_m * pts->reach_m, far_min2 = pts->far_min2;
     /* A float of x is off by at most 2^-24 |x|, and its square and the sum
      * of three by as much again each: the float |q|^2 is within 2^-21 of
      * |p|^2, relative. Squares under 2^-126 may flush to 0, so near2 is 0
@@ -341,12 +345,14 @@ static int add_exact(struct qrt_points *pts, const double *xyz, long n)
                 continue;
             }
         }
-        if (keep_near(pts, xyz + 3 * i, m, r2, &count, &far) != QRT_OK)
+        if (keep_near(pts, xyz + 3 * i, m, r2, &count, &far, &far_min2) !=
+            QRT_OK)
             return QRT_E_INVALID;
     }
     pts->count = count;
     pts->received += n;
     pts->ignored_far += far;
+    pts->far_min2 = far_min2;
     return QRT_OK;
 }
 
@@ -362,9 +368,12 @@ int qrt_points_add(struct qrt_points *pts, const double *xyz, long n)
         return QRT_E_INVALID;
     for (i = 0; i < n; i++) {
         const double *p = xyz + 3 * i;
+        double d2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
         pts->received++;
-        if (p[0] * p[0] + p[1] * p[1] + p[2] * p[2] > r2) {
+        if (d2 > r2) {
             pts->ignored_far++;
+            if (d2 < pts->far_min2)
+                pts->far_min2 = d2;
             continue;
         }
         add_one(pts, p);

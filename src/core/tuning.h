@@ -47,6 +47,15 @@
 /* Points tested against the clearance box at a time, in float over each
  * axis: whole blocks of a scan are far from the arm. */
 #define QRT_CLEARANCE_BLOCK 64
+/* A path's certified clearance (clearance.c) is within half this of the
+ * least clearance at the configurations it samples: each step lets the
+ * arm move at most this much farther than its clearance exceeds the least
+ * one so far. Smaller is tighter and takes more samples. */
+#define QRT_CERTIFY_SLACK_M 0.008
+/* Clearances more than this above the least one so far are not measured
+ * exactly (a sample stops looking at points that far away): they only
+ * size the next step, and a lower value makes it shorter, never unsafe. */
+#define QRT_CERTIFY_CAP_ABOVE_M 0.25
 
 /* --- the point table's intake (points.c) --- */
 
