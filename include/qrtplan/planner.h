@@ -259,7 +259,6 @@ int qrt_planner_check_path_now(struct qrt_planner *pl,
 int qrt_planner_certify_clearance(const struct qrt_planner *pl,
                                   struct qrt_plan *plan);
 
-
 /* The clearance of the arm at joints q_deg from the n points xyz (3n
  * doubles, metres, base frame), with this planner's arm and margin_m: the
  * exact check of the rule of docs/spec.md section Collision, for a caller
