@@ -3,15 +3,16 @@ pose, count, stamp, sensor and budget rules, the same counters, the same
 picture (docs/spec-interfaces.md §point_cloud_t). Plans made from clouds
 are checked by the independent oracle (tools/oracle.py)."""
 import struct
+import subprocess
 import time
 
 import numpy as np
-from conftest import (cloud_from_points, now_us, quat_rotate, request,
+from conftest import (DAEMON, cloud_from_points, now_us, quat_rotate, request,
                       scan_from_points, scene_points)
 from test_daemon import assert_safe
 
-# a sensor above and beside the base, looking down at 30 degrees and turned
-# 40 degrees about z: the points travel in its own frame
+# a sensor 0.8 m above the base and beside it, turned 40 degrees about an
+# oblique axis (0.34, 0.77, 0.54): the points travel in its own frame
 POSE = dict(position=(0.3, -0.2, 0.8),
             orientation=tuple(np.r_[np.cos(0.35), np.sin(0.35) *
                                     np.array([0.34, 0.77, 0.54]) /
@@ -202,3 +203,21 @@ def test_a_sensor_key_sends_clouds_of_its_own_id_only(daemon):
     assert p is not None and p.points == len(pts), d.text()
     assert [list(w) for w in p.waypoints_deg] == \
         [list(w) for w in first.waypoints_deg]
+
+
+def test_the_cloud_channel_option(daemon):
+    # LCM subscribes by regular expression: QRT.CLOUD would also take QRTXCLOUD
+    r = subprocess.run([DAEMON, "--cloud-channel", "QRT.CLOUD", "--help"],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and "cloud-channel:" in r.stderr, r.stderr
+    r = subprocess.run([DAEMON, "--help"], capture_output=True, text=True)
+    assert "--cloud-channel NAME" in r.stdout
+    # clouds on NAME_* of another name; the default channel is then not read
+    d, c = daemon("--cloud-channel", "PTS")
+    c.publish("QRT_CLOUD", cloud_from_points(ring(10), sensor="old"))
+    c.publish("PTS_front", cloud_from_points(ring(20), sensor="front"))
+    c.publish("QRT_PLAN_REQUEST", request([90, 0, 0], start=[-90, 0, 0],
+                                          request_id=1))
+    p = c.wait_plan(lambda p: p.request_id == 1 and p.status == "ok")
+    assert p is not None and p.points == 20, d.text()
+    assert "clouds PTS*" in d.text()
