@@ -3,8 +3,8 @@
 # decoders, the size guard, scan checks and conversion; and the
 # authenticated-message decoder; clang, ASan and UBSan) in build-fuzz/ and
 # runs each for SECONDS (default 30) from seeds made by the Python types (a
-# scan of the Table 4 sphere, a request; both authenticated with the fuzz
-# target's fixed test keys).
+# scan and a point cloud of the Table 4 sphere, a request; the scan and the
+# request also authenticated with the fuzz target's fixed test keys).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-30}
@@ -22,7 +22,10 @@ out = sys.argv[1]
 scene, pts = cf.scene_points("table4_one_sphere.json")
 scan = cf.scan_from_points(pts[:50]).encode()
 req = cf.request([1, 2, 3]).encode()
+cloud = cf.cloud_from_points(pts[:50], position=(0.1, 0.0, 0.3),
+                             orientation=(0.6, 0.0, 0.8, 0.0)).encode()
 open(os.path.join(out, "corpus_lcm", "scan"), "wb").write(scan)
+open(os.path.join(out, "corpus_lcm", "cloud"), "wb").write(cloud)
 open(os.path.join(out, "corpus_lcm", "request"), "wb").write(req)
 # the fuzz target's fixed keys (tests/fuzz/fuzz_auth.cpp)
 signers = []

@@ -119,46 +119,49 @@ bool Daemon::sensor_taken(const std::string &id, std::string *why)
 
 void Daemon::on_scan(const lcm::ReceiveBuffer *rbuf, const std::string &channel)
 {
+    on_sensor(rbuf, channel, SensorKind::scan);
+}
+
+void Daemon::on_cloud(const lcm::ReceiveBuffer *rbuf,
+                      const std::string &channel)
+{
+    on_sensor(rbuf, channel, SensorKind::cloud);
+}
+
+// A range scan or a point cloud: the same rules for both, counted in the
+// same scans_* counters (docs/spec-interfaces.md).
+void Daemon::on_sensor(const lcm::ReceiveBuffer *rbuf,
+                       const std::string &channel, SensorKind kind)
+{
     int64_t t = now_us(), wall = wall_us();
-    std::string why;
-    auto msg = std::make_shared<qrtplan::range_scan_t>();
+    const char *what = kind == SensorKind::scan ? "scan" : "cloud";
     PendingScan p;
     p.received_us = t;
     OpenedMessage in;
     if (!admit(rbuf, channel, SenderRole::sensor, &in))
         return;
-    bool ok =
-        scan_claims_fit(in.payload, in.payload_size, opts_.max_returns, &why);
-    if (ok && safe_decode(msg.get(), in.payload, in.payload_size) < 0) {
-        ok = false;
-        why = "not a qrtplan.range_scan_t (wrong type fingerprint or "
-              "truncated, " +
-              std::to_string(in.payload_size) + " bytes)";
-    }
-    if (ok) {
-        // refused here, a bad scan never displaces a good pending one
-        why = check_scan(*msg, opts_.max_returns);
-        ok = why.empty();
-    }
-    p.msg = msg;
+    // refused here, a bad message never displaces a good pending one
+    std::string why = decode_sensor_message(in.payload, in.payload_size, kind,
+                                            opts_.max_returns, &p.msg);
     std::lock_guard<std::mutex> lock(mu_);
-    if (!ok) {
+    if (!why.empty()) {
         scans_rejected_++;
-        reject(channel + ": scan refused: " + why);
+        reject(channel + ": " + what + " refused: " + why);
         return;
     }
-    const std::string &id = msg->sensor_id;
+    const std::string &id = p.msg.sensor_id();
     // a sensor's key speaks for that sensor only: another's scans from it
     // could erase the other sensor's obstacles
     if (in.sender && in.sender->name != id) {
         auth_refused_[size_t(AuthRefusal::not_permitted)]++;
-        reject(channel + ": scan refused: sensor key '" + in.sender->name +
-               "' sent a scan of sensor '" + id + "'");
+        reject(channel + ": " + what + " refused: sensor key '" +
+               in.sender->name + "' sent a " + what + " of sensor '" + id +
+               "'");
         return;
     }
     if (!sensor_taken(id, &why)) {
         scans_unknown_sensor_++;
-        reject(channel + ": scan refused: " + why);
+        reject(channel + ": " + what + " refused: " + why);
         return;
     }
     // the stamp against this computer's clock (docs: both keep
@@ -166,17 +169,18 @@ void Daemon::on_scan(const lcm::ReceiveBuffer *rbuf, const std::string &channel)
     // every fresh one, a scan older than the maximum age is no evidence
     const int64_t skew = int64_t(opts_.max_clock_skew_s * 1e6);
     const int64_t max_age = int64_t(opts_.max_scan_age_s * 1e6);
-    if (msg->utime > wall + skew) {
+    const int64_t utime = p.msg.utime();
+    if (utime > wall + skew) {
         scans_future_++;
-        reject(channel + ": scan from '" + id + "' refused: stamped " +
-               std::to_string((msg->utime - wall) / 1000) +
+        reject(channel + ": " + what + " from '" + id + "' refused: stamped " +
+               std::to_string((utime - wall) / 1000) +
                " ms ahead of this computer's clock");
         return;
     }
-    if (wall - msg->utime > max_age) {
+    if (wall - utime > max_age) {
         scans_stale_++;
-        reject(channel + ": scan from '" + id +
-               "' refused: " + std::to_string((wall - msg->utime) / 1000) +
+        reject(channel + ": " + what + " from '" + id +
+               "' refused: " + std::to_string((wall - utime) / 1000) +
                " ms old, over --max-scan-age");
         return;
     }
@@ -328,21 +332,22 @@ void Daemon::ingest(std::map<std::string, PendingScan> &scans, Picture *picture,
     const double reach = arm_reach_m(arm, opts_.params.margin_m);
     for (auto &kv : scans) {
         ScanPoints sp;
-        std::string why =
-            scan_to_points(*kv.second.msg, opts_.max_returns, reach, &sp);
+        const SensorMessage &m = kv.second.msg;
+        std::string why = to_points(m, opts_.max_returns, reach, &sp);
         if (!why.empty()) {
             if (report) {
                 std::lock_guard<std::mutex> lock(mu_);
                 scans_rejected_++;
-                reject("scan from '" + kv.first + "' refused: " + why);
+                reject(std::string(m.kind()) + " from '" + kv.first +
+                       "' refused: " + why);
             }
             continue;
         }
         *invalid += sp.invalid;
         long far = sp.out_of_reach, n = long(sp.xyz.size() / 3);
         if (sp.invalid > 0 && report)
-            log(LogLevel::debug, "scan from '%s': %ld returns NaN/Inf or <= 0",
-                kv.first.c_str(), sp.invalid);
+            log(LogLevel::debug, "%s from '%s': %ld returns NaN/Inf or <= 0",
+                m.kind(), kv.first.c_str(), sp.invalid);
         bool fits = picture->add(std::move(sp), wall_us());
         if (!report)
             continue;
@@ -350,8 +355,8 @@ void Daemon::ingest(std::map<std::string, PendingScan> &scans, Picture *picture,
         returns_out_of_reach_ += far;
         if (!fits) {
             scans_over_budget_++;
-            reject("scan from '" + kv.first + "' refused: its " +
-                   std::to_string(n) +
+            reject(std::string(m.kind()) + " from '" + kv.first +
+                   "' refused: its " + std::to_string(n) +
                    " points in reach do not fit the obstacle picture's "
                    "--max-points " +
                    std::to_string(opts_.max_points) +
@@ -1024,12 +1029,13 @@ int Daemon::run(const RunFlags &flags)
     }
     started_us_ = now_us();
     lcm_.subscribe(opts_.scan_channel + "(_.*)?", &Daemon::on_scan, this);
+    lcm_.subscribe(opts_.cloud_channel + "(_.*)?", &Daemon::on_cloud, this);
     lcm_.subscribe(opts_.request_channel, &Daemon::on_request, this);
     if (!can_)
         lcm_.subscribe(opts_.joint_channel, &Daemon::on_joints, this);
-    log(LogLevel::info, "listening on %s (scans %s*, requests %s)",
+    log(LogLevel::info, "listening on %s (scans %s*, clouds %s*, requests %s)",
         opts_.lcm_url.c_str(), opts_.scan_channel.c_str(),
-        opts_.request_channel.c_str());
+        opts_.cloud_channel.c_str(), opts_.request_channel.c_str());
     std::thread planner([&] { planner_loop(flags); });
     std::thread clock([&] { clock_loop(stop); });
     std::thread guard;

@@ -57,13 +57,15 @@ class Daemon
 
   private:
     struct PendingScan {
-        // shared by the planner's and the guard's queues, never copied
-        std::shared_ptr<const qrtplan::range_scan_t> msg;
+        SensorMessage msg; // a scan or a cloud (ingest.hpp)
         int64_t received_us;
     };
     using Path = std::vector<std::array<double, 3>>;
 
     void on_scan(const lcm::ReceiveBuffer *rbuf, const std::string &channel);
+    void on_cloud(const lcm::ReceiveBuffer *rbuf, const std::string &channel);
+    void on_sensor(const lcm::ReceiveBuffer *rbuf, const std::string &channel,
+                   SensorKind kind);
     void on_request(const lcm::ReceiveBuffer *rbuf, const std::string &channel);
     void on_joints(const lcm::ReceiveBuffer *rbuf, const std::string &channel);
     bool admit(const lcm::ReceiveBuffer *rbuf, const std::string &channel,

@@ -12,12 +12,16 @@
 namespace qrt
 {
 
-bool scan_claims_fit(const void *buf, int size, long max_returns,
-                     std::string *why)
+namespace
+{
+
+// The size guard of both messages: fingerprint 8, utime 8, sensor_id
+// (length 4 + bytes), position 24, orientation 32, `between` bytes (a
+// scan's max range), n 4, then 3 float arrays of n.
+bool claims_fit(const void *buf, int size, long between, long max_returns,
+                const char *what, std::string *why)
 {
     const uint8_t *b = static_cast<const uint8_t *>(buf);
-    // fingerprint 8, utime 8, sensor_id (length 4 + bytes), position 24,
-    // orientation 32, max_range 4, n 4, then 3 float arrays of n
     long pos = 16;
     if (size < pos + 4) {
         *why = "truncated (" + std::to_string(size) + " bytes)";
@@ -28,7 +32,7 @@ bool scan_claims_fit(const void *buf, int size, long max_returns,
         *why = "bad sensor_id length";
         return false;
     }
-    pos += 4 + len + 24 + 32 + 4;
+    pos += 4 + len + 24 + 32 + between;
     if (size < pos + 4) {
         *why = "truncated (" + std::to_string(size) + " bytes)";
         return false;
@@ -36,42 +40,153 @@ bool scan_claims_fit(const void *buf, int size, long max_returns,
     int32_t n = int32_t(lcm_u32(b + pos));
     pos += 4;
     if (n < 0 || long(n) > max_returns) {
-        *why = "claims " + std::to_string(n) + " returns (limit " +
+        *why = "claims " + std::to_string(n) + " " + what + " (limit " +
                std::to_string(max_returns) + ")";
         return false;
     }
     if (size - pos < 12L * n) {
-        *why = "claims " + std::to_string(n) + " returns but holds " +
+        *why = "claims " + std::to_string(n) + " " + what + " but holds " +
                std::to_string(size) + " bytes";
         return false;
     }
     return true;
 }
 
-std::string check_scan(const qrtplan::range_scan_t &s, long max_returns)
+// The header both messages share: sensor id, pose, count.
+std::string check_header(const std::string &id, const double position[3],
+                         const double orientation[4], int32_t n,
+                         long max_returns, const char *what)
 {
-    if (s.sensor_id.size() > 64)
+    if (id.size() > 64)
         return "sensor_id longer than 64 characters";
-    for (char ch : s.sensor_id)
+    for (char ch : id)
         if (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f)
             return "sensor_id with control characters";
-    for (double v : s.position_m)
-        if (!std::isfinite(v) || std::fabs(v) > 1e3)
+    for (int i = 0; i < 3; i++)
+        if (!std::isfinite(position[i]) || std::fabs(position[i]) > 1e3)
             return "non-finite or absurd sensor position";
-    for (double v : s.orientation)
-        if (!std::isfinite(v))
+    for (int i = 0; i < 4; i++)
+        if (!std::isfinite(orientation[i]))
             return "non-finite orientation";
-    Eigen::Quaterniond q(s.orientation[0], s.orientation[1], s.orientation[2],
-                         s.orientation[3]);
+    Eigen::Quaterniond q(orientation[0], orientation[1], orientation[2],
+                         orientation[3]);
     double norm = q.norm();
     if (std::fabs(norm - 1.0) > 1e-3)
         return "orientation is not a unit quaternion (norm " +
                std::to_string(norm) + ")";
+    if (n < 0 || long(n) > max_returns)
+        return std::string("too many ") + what + " (" + std::to_string(n) + ")";
+    return "";
+}
+
+using Mask = Eigen::Array<bool, Eigen::Dynamic, 1>;
+
+// Sensor-frame points (a column each) to the base frame, keeping the hits
+// within reach_m of the base: the one conversion of scans and clouds. The
+// header has been checked; a column that is not a hit may hold NaN.
+void sensor_to_base(const double position[3], const double orientation[4],
+                    const Eigen::Matrix3Xd &local, Mask hit, double reach_m,
+                    ScanPoints *out)
+{
+    Eigen::Quaterniond q(orientation[0], orientation[1], orientation[2],
+                         orientation[3]);
+    Eigen::Matrix3d R = q.normalized().toRotationMatrix();
+    Eigen::Vector3d t(position[0], position[1], position[2]);
+    Eigen::Matrix3Xd world = (R * local).colwise() + t;
+    // beyond reach: no capsule of the arm, grown by the margin, can touch it
+    Mask near = world.colwise().norm().array().transpose() <= reach_m;
+    out->out_of_reach = long((hit && !near).count());
+    hit = hit && near;
+    long kept = long(hit.count());
+    out->xyz.resize(size_t(kept) * 3);
+    long k = 0;
+    for (Eigen::Index i = 0; i < local.cols(); i++)
+        if (hit(i)) {
+            std::memcpy(&out->xyz[size_t(k) * 3], world.col(i).data(),
+                        3 * sizeof(double));
+            k++;
+        }
+}
+
+void start_points(const std::string &id, int64_t utime, ScanPoints *out)
+{
+    out->sensor = id;
+    out->utime = utime;
+    out->xyz.clear();
+    out->no_hit = out->invalid = out->out_of_reach = 0;
+}
+
+} // namespace
+
+bool scan_claims_fit(const void *buf, int size, long max_returns,
+                     std::string *why)
+{
+    return claims_fit(buf, size, 4, max_returns, "returns", why);
+}
+
+bool cloud_claims_fit(const void *buf, int size, long max_returns,
+                      std::string *why)
+{
+    return claims_fit(buf, size, 0, max_returns, "points", why);
+}
+
+std::string check_scan(const qrtplan::range_scan_t &s, long max_returns)
+{
+    std::string why = check_header(s.sensor_id, s.position_m, s.orientation,
+                                   s.n, max_returns, "returns");
+    if (!why.empty())
+        return why;
     if (!std::isfinite(s.max_range_m) || s.max_range_m <= 0.0f)
         return "max_range_m must be positive and finite";
-    if (s.n < 0 || long(s.n) > max_returns)
-        return "too many returns (" + std::to_string(s.n) + ")";
     return "";
+}
+
+std::string check_cloud(const qrtplan::point_cloud_t &c, long max_returns)
+{
+    return check_header(c.sensor_id, c.position_m, c.orientation, c.n,
+                        max_returns, "points");
+}
+
+namespace
+{
+
+// The size guard, the decoder and the checks of one kind. The fingerprint
+// first: a message of the other kind would otherwise be refused for what
+// its bytes claim when read as this one.
+template <class T>
+std::string
+decode_as(const void *buf, int size, long max_returns, const char *type,
+          bool (*fits)(const void *, int, long, std::string *),
+          std::string (*check)(const T &, long), std::shared_ptr<const T> *out)
+{
+    const uint8_t *b = static_cast<const uint8_t *>(buf);
+    std::string why;
+    if (size < 8 || int64_t(lcm_u64(b)) != T::getHash())
+        return std::string("not a qrtplan.") + type +
+               " (wrong type fingerprint, " + std::to_string(size) + " bytes)";
+    if (!fits(buf, size, max_returns, &why))
+        return why;
+    auto msg = std::make_shared<T>();
+    if (safe_decode(msg.get(), buf, size) < 0)
+        return std::string("not a qrtplan.") + type + " (truncated, " +
+               std::to_string(size) + " bytes)";
+    why = check(*msg, max_returns);
+    if (why.empty())
+        *out = msg;
+    return why;
+}
+
+} // namespace
+
+std::string decode_sensor_message(const void *buf, int size, SensorKind kind,
+                                  long max_returns, SensorMessage *out)
+{
+    *out = SensorMessage();
+    if (kind == SensorKind::scan)
+        return decode_as(buf, size, max_returns, "range_scan_t",
+                         scan_claims_fit, check_scan, &out->scan);
+    return decode_as(buf, size, max_returns, "point_cloud_t", cloud_claims_fit,
+                     check_cloud, &out->cloud);
 }
 
 double arm_reach_m(const qrt_arm &arm, double margin_m)
@@ -82,15 +197,10 @@ double arm_reach_m(const qrt_arm &arm, double margin_m)
 std::string scan_to_points(const qrtplan::range_scan_t &s, long max_returns,
                            double reach_m, ScanPoints *out)
 {
-    out->sensor = s.sensor_id;
-    out->utime = s.utime;
-    out->xyz.clear();
-    out->no_hit = out->invalid = out->out_of_reach = 0;
+    start_points(s.sensor_id, s.utime, out);
     std::string why = check_scan(s, max_returns);
     if (!why.empty())
         return why;
-    Eigen::Quaterniond q(s.orientation[0], s.orientation[1], s.orientation[2],
-                         s.orientation[3]);
     const Eigen::Index n = s.n;
     if (n == 0)
         return "";
@@ -98,10 +208,8 @@ std::string scan_to_points(const qrtplan::range_scan_t &s, long max_returns,
     Eigen::Map<const Eigen::ArrayXf> el(s.elevation_rad.data(), n);
     Eigen::Map<const Eigen::ArrayXf> r(s.range_m.data(), n);
     // a return counts when all three numbers are finite and 0 < r < max
-    Eigen::Array<bool, Eigen::Dynamic, 1> finite =
-        az.isFinite() && el.isFinite() && r.isFinite();
-    Eigen::Array<bool, Eigen::Dynamic, 1> hit =
-        finite && r > 0.0f && r < s.max_range_m;
+    Mask finite = az.isFinite() && el.isFinite() && r.isFinite();
+    Mask hit = finite && r > 0.0f && r < s.max_range_m;
     out->invalid = long((!finite || (finite && r <= 0.0f)).count());
     out->no_hit = long((finite && r >= s.max_range_m).count());
     // directions in the sensor frame, whole arrays at a time
@@ -112,24 +220,39 @@ std::string scan_to_points(const qrtplan::range_scan_t &s, long max_returns,
     local.row(0) = (rd * ce * ca).matrix().transpose();
     local.row(1) = (rd * ce * sa).matrix().transpose();
     local.row(2) = (rd * se).matrix().transpose();
-    Eigen::Matrix3d R = q.normalized().toRotationMatrix();
-    Eigen::Vector3d t(s.position_m[0], s.position_m[1], s.position_m[2]);
-    Eigen::Matrix3Xd world = (R * local).colwise() + t;
-    // beyond reach: no capsule of the arm, grown by the margin, can touch it
-    Eigen::Array<bool, Eigen::Dynamic, 1> near =
-        world.colwise().norm().array().transpose() <= reach_m;
-    out->out_of_reach = long((hit && !near).count());
-    hit = hit && near;
-    long kept = long(hit.count());
-    out->xyz.resize(size_t(kept) * 3);
-    long k = 0;
-    for (Eigen::Index i = 0; i < n; i++)
-        if (hit(i)) {
-            std::memcpy(&out->xyz[size_t(k) * 3], world.col(i).data(),
-                        3 * sizeof(double));
-            k++;
-        }
+    sensor_to_base(s.position_m, s.orientation, local, hit, reach_m, out);
     return "";
+}
+
+std::string cloud_to_points(const qrtplan::point_cloud_t &c, long max_returns,
+                            double reach_m, ScanPoints *out)
+{
+    start_points(c.sensor_id, c.utime, out);
+    std::string why = check_cloud(c, max_returns);
+    if (!why.empty())
+        return why;
+    const Eigen::Index n = c.n;
+    if (n == 0)
+        return "";
+    Eigen::Map<const Eigen::ArrayXf> x(c.x_m.data(), n);
+    Eigen::Map<const Eigen::ArrayXf> y(c.y_m.data(), n);
+    Eigen::Map<const Eigen::ArrayXf> z(c.z_m.data(), n);
+    // a point counts when its three coordinates are finite
+    Mask hit = x.isFinite() && y.isFinite() && z.isFinite();
+    out->invalid = long((!hit).count());
+    Eigen::Matrix3Xd local(3, n);
+    local.row(0) = x.cast<double>().matrix().transpose();
+    local.row(1) = y.cast<double>().matrix().transpose();
+    local.row(2) = z.cast<double>().matrix().transpose();
+    sensor_to_base(c.position_m, c.orientation, local, hit, reach_m, out);
+    return "";
+}
+
+std::string to_points(const SensorMessage &m, long max_returns, double reach_m,
+                      ScanPoints *out)
+{
+    return m.scan ? scan_to_points(*m.scan, max_returns, reach_m, out)
+                  : cloud_to_points(*m.cloud, max_returns, reach_m, out);
 }
 
 bool Picture::add(ScanPoints &&scan, int64_t now_us)

@@ -1,27 +1,60 @@
-// Range scans -> base-frame points, and the obstacle picture they build.
+// Range scans and point clouds -> base-frame points, and the obstacle
+// picture they build.
 #pragma once
 
 #include <cstdint>
 #include <deque>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "qrtplan/arm.h"
+#include "qrtplan/point_cloud_t.hpp"
 #include "qrtplan/range_scan_t.hpp"
 
 namespace qrt
 {
 
-// The points of one scan in the arm's base frame.
+// The points of one scan or cloud in the arm's base frame.
 struct ScanPoints {
     std::string sensor;
     int64_t utime = 0;
     std::vector<double> xyz; // 3 per point
-    long no_hit = 0;         // range >= max range
-    long invalid = 0;        // NaN/Inf angle or range, range <= 0
+    long no_hit = 0;         // range >= max range (scans only)
+    long invalid = 0;        // NaN/Inf angle, range or coordinate, range <= 0
     long out_of_reach = 0;   // farther from the base than the arm can come
 };
+
+// What a sensor sends: a range scan (azimuth, elevation, range) or a point
+// cloud (x, y, z). Both carry the same header (stamp, sensor id, pose) and
+// go through the same checks, the same conversion and the same picture; a
+// sensor may send either, and its newest message of either kind is its
+// entry. Exactly one pointer is set; shared by the planner's and the
+// guard's queues, never copied.
+enum class SensorKind { scan, cloud };
+struct SensorMessage {
+    std::shared_ptr<const qrtplan::range_scan_t> scan;
+    std::shared_ptr<const qrtplan::point_cloud_t> cloud;
+    const std::string &sensor_id() const
+    {
+        return scan ? scan->sensor_id : cloud->sensor_id;
+    }
+    int64_t utime() const
+    {
+        return scan ? scan->utime : cloud->utime;
+    }
+    const char *kind() const // "scan" or "cloud", for log lines
+    {
+        return scan ? "scan" : "cloud";
+    }
+};
+
+// Untrusted bytes -> a checked message of the given kind: the size guard
+// (*_claims_fit), the decoder, then the whole-message checks (check_scan,
+// check_cloud). "" with *out set, or why the message is refused.
+std::string decode_sensor_message(const void *buf, int size, SensorKind kind,
+                                  long max_returns, SensorMessage *out);
 
 // Whether the obstacle picture is evidence enough to move on: status ""
 // when it is, else the plan status that says why not (no_obstacle_data,
@@ -40,10 +73,14 @@ struct Evidence {
 // length, so a short message claiming 2^31 returns would allocate first.
 bool scan_claims_fit(const void *buf, int size, long max_returns,
                      std::string *why);
+bool cloud_claims_fit(const void *buf, int size, long max_returns,
+                      std::string *why);
 
-// The whole-scan checks: pose finite and a unit quaternion, max range
-// positive, count within max_returns. "" or why the scan is refused.
+// The whole-message checks: sensor id printable and <= 64 characters, pose
+// finite and a unit quaternion, count within max_returns; for a scan also
+// max range positive. "" or why the message is refused.
 std::string check_scan(const qrtplan::range_scan_t &scan, long max_returns);
+std::string check_cloud(const qrtplan::point_cloud_t &cloud, long max_returns);
 
 // Validates the pose and converts every return (vectorised with Eigen: the
 // trigonometry runs over whole arrays, then one 3xN rotation). Points
@@ -53,6 +90,13 @@ std::string check_scan(const qrtplan::range_scan_t &scan, long max_returns);
 // returns).
 std::string scan_to_points(const qrtplan::range_scan_t &scan, long max_returns,
                            double reach_m, ScanPoints *out);
+// The same for a cloud: a point is invalid when a coordinate is not finite;
+// the pose, the rotation and the reach are scan_to_points' own code.
+std::string cloud_to_points(const qrtplan::point_cloud_t &cloud,
+                            long max_returns, double reach_m, ScanPoints *out);
+// Whichever kind the message is.
+std::string to_points(const SensorMessage &msg, long max_returns,
+                      double reach_m, ScanPoints *out);
 
 // How far from the base origin an obstacle point can matter: every point
 // of the arm lies within the sum of the link and tool lengths of the

@@ -32,6 +32,9 @@ const char *kUsage =
     "  --lcm-url URL            (udpm://239.255.76.67:7667?ttl=0)\n"
     "  --scan-channel NAME      scans on NAME and NAME_* (QRT_SCAN); each\n"
     "                           sensor_id keeps its own entry\n"
+    "  --cloud-channel NAME     point clouds on NAME and NAME_* (QRT_CLOUD),\n"
+    "                           taken as scans are (a sensor_id's newest\n"
+    "                           scan or cloud is its entry)\n"
     "  --request-channel NAME   plan requests (QRT_PLAN_REQUEST)\n"
     "  --plan-channel NAME      plans out (QRT_PLAN)\n"
     "  --joint-channel NAME     joint state: published with --can, else\n"
@@ -45,7 +48,8 @@ const char *kUsage =
     "                           as it reads them, or the whole mask first\n"
     "                           (as-read; the plan is the same)\n"
     "  --mask-threads 1|2       build a whole mask on 1 or 2 threads (2)\n"
-    "  --max-returns N          refuse scans with more returns (1000000)\n"
+    "  --max-returns N          refuse scans (clouds) with more returns\n"
+    "                           (points) (1000000)\n"
     "  --max-points N           points the obstacle picture holds, all\n"
     "                           sensors together (2000000); returns beyond\n"
     "                           the arm's reach are dropped first; a scan\n"
@@ -170,6 +174,7 @@ bool apply(Options *o, const std::string &key, const std::string &value,
         return parse_numbers(value, &v, 1) && v >= lo && v <= hi;
     };
     std::string *channel = key == "scan-channel"      ? &o->scan_channel
+                           : key == "cloud-channel"   ? &o->cloud_channel
                            : key == "request-channel" ? &o->request_channel
                            : key == "plan-channel"    ? &o->plan_channel
                            : key == "joint-channel"   ? &o->joint_channel

@@ -14,7 +14,8 @@ namespace qrt
 
 struct Options {
     std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
-    std::string scan_channel = "QRT_SCAN"; // and QRT_SCAN_<sensor>...
+    std::string scan_channel = "QRT_SCAN";   // and QRT_SCAN_<sensor>...
+    std::string cloud_channel = "QRT_CLOUD"; // and QRT_CLOUD_<sensor>...
     std::string request_channel = "QRT_PLAN_REQUEST";
     std::string plan_channel = "QRT_PLAN";
     std::string joint_channel = "QRT_JOINT_STATE";

@@ -18,7 +18,7 @@ sys.path.insert(0, os.environ.get("QRT_LCMTYPES_PY",
                                   os.path.join(REPO, "build", "lcmtypes", "python")))
 import lcm  # noqa: E402
 from qrtplan import (daemon_status_t, joint_state_t, plan_request_t,  # noqa: E402
-                     plan_t, range_scan_t)
+                     plan_t, point_cloud_t, range_scan_t)
 import qrtauth  # noqa: E402
 
 DAEMON = os.environ.get("QRTPLAND_BIN", os.path.join(REPO, "build", "bin", "qrtpland"))
@@ -46,6 +46,32 @@ def scan_from_points(points, sensor="s0", position=(0.0, 0.0, 0.0),
     msg.azimuth_rad = np.arctan2(p[:, 1], p[:, 0]).tolist()
     msg.elevation_rad = np.arcsin(np.clip(p[:, 2] / np.maximum(r, 1e-12), -1, 1)).tolist()
     msg.range_m = r.tolist()
+    return msg
+
+
+def quat_rotate(q, v):
+    """v (N x 3) turned by the unit quaternion q = (w, x, y, z)."""
+    w, u = q[0], np.asarray(q[1:], float)
+    v = np.asarray(v, float)
+    t = 2.0 * np.cross(u, v)
+    return v + w * t + np.cross(u, t)
+
+
+def cloud_from_points(points, sensor="s0", position=(0.0, 0.0, 0.0),
+                      orientation=(1.0, 0.0, 0.0, 0.0), utime=None):
+    """A point cloud holding the given base-frame points, seen from a sensor
+    at `position` turned by `orientation` (sensor -> base): the message
+    carries them in the sensor frame, as a sensor would send them."""
+    p = np.asarray(points, float).reshape(-1, 3) - np.asarray(position, float)
+    q = np.asarray(orientation, float)
+    local = quat_rotate([q[0], -q[1], -q[2], -q[3]], p)  # base -> sensor
+    msg = point_cloud_t()
+    msg.utime = now_us() if utime is None else utime
+    msg.sensor_id = sensor
+    msg.position_m = list(position)
+    msg.orientation = list(orientation)
+    msg.n = len(local)
+    msg.x_m, msg.y_m, msg.z_m = (local[:, i].tolist() for i in range(3))
     return msg
 
 

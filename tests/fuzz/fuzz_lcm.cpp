@@ -1,6 +1,6 @@
 // libFuzzer target on qrtpland's message intake: the pre-decode size guard,
-// the lcm-gen decoders of every type the daemon reads, and the scan checks
-// and conversion.
+// the lcm-gen decoders of every type the daemon reads, and the scan and
+// cloud checks and conversion (the same bytes tried as each type).
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -10,6 +10,7 @@
 #include "ingest.hpp"
 #include "qrtplan/joint_state_t.hpp"
 #include "qrtplan/plan_request_t.hpp"
+#include "qrtplan/point_cloud_t.hpp"
 #include "qrtplan/range_scan_t.hpp"
 
 // Whatever decodes must encode, and that encoding must decode and encode to
@@ -28,38 +29,46 @@ template <class T> static void round_trip(const T &m, int used)
         __builtin_trap();
 }
 
+// A checked scan or cloud: what decodes round-trips, and its points are
+// within reach, finite, and fit a picture exactly when they fit its budget.
+static void points_hold(const qrt::SensorMessage &m)
+{
+    if (m.scan)
+        round_trip(*m.scan, int(m.scan->getEncodedSize()));
+    else
+        round_trip(*m.cloud, int(m.cloud->getEncodedSize()));
+    qrt::ScanPoints sp;
+    if (!qrt::to_points(m, 100000, 1.0, &sp).empty())
+        __builtin_trap(); // decode_sensor_message checked it already
+    if (sp.xyz.size() % 3 != 0)
+        __builtin_trap();
+    for (size_t i = 0; i < sp.xyz.size(); i += 3)
+        if (sp.xyz[i] * sp.xyz[i] + sp.xyz[i + 1] * sp.xyz[i + 1] +
+                sp.xyz[i + 2] * sp.xyz[i + 2] >
+            1.0 + 1e-9)
+            __builtin_trap(); // beyond reach must be dropped
+    qrt::Picture pic(0.5, 50000);
+    long n = long(sp.xyz.size() / 3);
+    bool fits = pic.add(std::move(sp), m.utime());
+    if (fits != (n <= 50000) || pic.points() != (fits ? n : 0))
+        __builtin_trap();
+    std::vector<double> xyz;
+    pic.gather(&xyz);
+    for (double v : xyz)
+        if (!(v == v))
+            __builtin_trap(); // NaN must never reach the core
+}
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     if (size > (1u << 20))
         return 0;
     const int n = int(size);
-    std::string why;
-    if (qrt::scan_claims_fit(data, n, 100000, &why)) {
-        qrtplan::range_scan_t scan;
-        int used = qrt::safe_decode(&scan, data, n);
-        if (used >= 0 && qrt::check_scan(scan, 100000).empty()) {
-            round_trip(scan, used);
-            qrt::ScanPoints sp;
-            if (qrt::scan_to_points(scan, 100000, 1.0, &sp).empty()) {
-                if (sp.xyz.size() % 3 != 0)
-                    __builtin_trap();
-                for (size_t i = 0; i < sp.xyz.size(); i += 3)
-                    if (sp.xyz[i] * sp.xyz[i] + sp.xyz[i + 1] * sp.xyz[i + 1] +
-                            sp.xyz[i + 2] * sp.xyz[i + 2] >
-                        1.0 + 1e-9)
-                        __builtin_trap(); // beyond reach must be dropped
-                qrt::Picture pic(0.5, 50000);
-                long n = long(sp.xyz.size() / 3);
-                bool fits = pic.add(std::move(sp), scan.utime);
-                if (fits != (n <= 50000) || pic.points() != (fits ? n : 0))
-                    __builtin_trap();
-                std::vector<double> xyz;
-                pic.gather(&xyz);
-                for (double v : xyz)
-                    if (!(v == v))
-                        __builtin_trap(); // NaN must never reach the core
-            }
-        }
+    for (qrt::SensorKind kind :
+         {qrt::SensorKind::scan, qrt::SensorKind::cloud}) {
+        qrt::SensorMessage m;
+        if (qrt::decode_sensor_message(data, n, kind, 100000, &m).empty())
+            points_hold(m);
     }
     qrtplan::plan_request_t req;
     int used = qrt::safe_decode(&req, data, n);
