@@ -16,6 +16,9 @@
  * SDO), so all joints start and finish together and the arm stays on the
  * segment up to the drives' following error. Alpha moves the short way
  * round; its drive position is kept continuous (no jump at +-180 degrees).
+ * That profile is qrtcan/profile.h's (qrtcan_segment_step,
+ * qrtcan_segment_profile, qrtcan_segment_counts), which the master calls
+ * for each segment from where the drives stand.
  */
 #ifndef QRTCAN_MASTER_H
 #define QRTCAN_MASTER_H
@@ -24,13 +27,13 @@
 
 #include "qrtcan/cia402.h"
 #include "qrtcan/frame.h"
+#include "qrtcan/profile.h"
 #include "qrtcan/scale.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-#define QRTCAN_JOINTS 3
 #define QRTCAN_MASTER_MAX_WAYPOINTS 256
 #define QRTCAN_MASTER_OUTBOX 64
 
