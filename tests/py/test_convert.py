@@ -286,3 +286,21 @@ def test_setpoints_refusals(doc, flags, message):
 def test_setpoints_one_waypoint():
     rows = csv_rows({"status": "ok", "waypoints_deg": [[10, 20, 30]]})
     assert rows.tolist() == [[0, 10, 20, 30]]
+
+
+# qrtpland's and qrtplan-exec's --speed/--accel refusals
+# (test_can_options.py): the same values, the same range
+@pytest.mark.parametrize("option", ["--speed", "--accel"])
+@pytest.mark.parametrize("value, ok", [
+    ("30,60", False), ("0", False), ("30,0,30", False), ("1e5", False),
+    ("-30", False), ("nan", False), ("30,60,90,1", False), ("30,,30", False),
+    ("0.001", True), ("10000", True), ("40,10,20", True)])
+def test_setpoints_speed_accel_as_the_daemon(option, value, ok):
+    r = subprocess.run([str(BIN), "setpoints", "-", option, value],
+                       input='{"status": "ok", "waypoints_deg": '
+                             '[[0, 0, 0], [5, 0, 0]]}',
+                       capture_output=True, text=True)
+    if ok:
+        assert r.returncode == 0, r.stderr
+    else:
+        assert r.returncode == 2 and "0.001..10000" in r.stderr, r.stderr
