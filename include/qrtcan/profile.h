@@ -82,6 +82,16 @@ void qrtcan_segment_counts(const struct qrtcan_segment *seg,
                            uint32_t vel[QRTCAN_JOINTS],
                            uint32_t acc[QRTCAN_JOINTS]);
 
+/* qrtcan_segment_profile, then qrtcan_segment_counts: the values the
+ * master writes for a segment of step_deg (the profile kept off the
+ * caller's stack frame). QRTCAN_E_ARG as qrtcan_segment_profile. */
+int qrtcan_segment_drive_profile(const double max_speed_deg_s[QRTCAN_JOINTS],
+                                 const double max_accel_deg_s2[QRTCAN_JOINTS],
+                                 const struct qrtcan_scale scale[QRTCAN_JOINTS],
+                                 const double step_deg[QRTCAN_JOINTS],
+                                 uint32_t vel[QRTCAN_JOINTS],
+                                 uint32_t acc[QRTCAN_JOINTS]);
+
 #ifdef __cplusplus
 }
 #endif

@@ -618,7 +618,6 @@ static int all_enabled(const struct qrtcan_master *m)
 
 static void start_segment(struct qrtcan_master *m, uint64_t now_us)
 {
-    struct qrtcan_segment seg;
     double d[3];
     int j;
     if (!segment_targets(m, d, m->segment_counts)) {
@@ -626,13 +625,12 @@ static void start_segment(struct qrtcan_master *m, uint64_t now_us)
         return;
     }
     /* the synchronised trapezoid (qrtcan/profile.h), in the drives' counts */
-    if (qrtcan_segment_profile(m->cfg.max_speed_deg_s, m->cfg.max_accel_deg_s2,
-                               d, &seg) != QRTCAN_OK) {
+    if (qrtcan_segment_drive_profile(
+            m->cfg.max_speed_deg_s, m->cfg.max_accel_deg_s2, m->cfg.scale, d,
+            m->segment_profile[0], m->segment_profile[1]) != QRTCAN_OK) {
         fail(m, QRTCAN_REASON_SDO_ABORT, 0, OD_PROFILE_VELOCITY, now_us);
         return;
     }
-    qrtcan_segment_counts(&seg, m->cfg.scale, m->segment_profile[0],
-                          m->segment_profile[1]);
     for (j = 0; j < QRTCAN_JOINTS; j++) {
         m->segment_profile[2][j] = m->segment_profile[1][j];
         m->drive[j].sdo_step = 0;
