@@ -30,7 +30,7 @@ done >"$out/corpus_can/loop"
 clang -std=c99 -g -O1 -fsanitize=fuzzer,address,undefined \
     -fno-sanitize-recover=all -Iinclude -Ifirmware_sim \
     tests/fuzz/fuzz_can.c firmware_sim/drive.c src/canopen/*.c \
-    src/canmaster/master.c -lm \
+    src/canmaster/master.c src/canmaster/profile.c -lm \
     -o "$out/fuzz_can"
 "$out/fuzz_can" -max_total_time="$seconds" -max_len=4096 -timeout=10 \
     -print_final_stats=1 "$out/corpus_can" 2>"$out/fuzz_can.log" ||

@@ -16,7 +16,7 @@ if [ "${1:-}" = --can ]; then
     part="servo side"
     shift
     args+=(-Ifirmware_sim "--suppress=misra-c2012-2.5:include/qrtcan/*")
-    sources=(src/canopen/*.c src/canmaster/master.c firmware_sim/drive.c)
+    sources=(src/canopen/*.c src/canmaster/master.c src/canmaster/profile.c firmware_sim/drive.c)
 else
     args+=(-Isrc/core -DQRT_GRID_DEG_MIN=5 -DQRT_MAX_POINTS=16384)
     sources=(src/core/*.c)

@@ -16,6 +16,10 @@
  * SDO), so all joints start and finish together and the arm stays on the
  * segment up to the drives' following error. Alpha moves the short way
  * round; its drive position is kept continuous (no jump at +-180 degrees).
+ * That profile is qrtcan/profile.h's: the master calls qrtcan_segment_step
+ * and qrtcan_segment_drive_profile for each segment from where the drives
+ * stand; qrtcan_segment_profile and qrtcan_segment_at give its motion in
+ * time (qrtplan setpoints).
  */
 #ifndef QRTCAN_MASTER_H
 #define QRTCAN_MASTER_H
@@ -24,13 +28,13 @@
 
 #include "qrtcan/cia402.h"
 #include "qrtcan/frame.h"
+#include "qrtcan/profile.h"
 #include "qrtcan/scale.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-#define QRTCAN_JOINTS 3
 #define QRTCAN_MASTER_MAX_WAYPOINTS 256
 #define QRTCAN_MASTER_OUTBOX 64
 

@@ -455,50 +455,6 @@ int qrtcan_master_set_path(struct qrtcan_master *m, const double (*wp)[3],
     return QRTCAN_OK;
 }
 
-/* Slowest profile a joint gets, in degrees per second (squared): a joint
- * whose share of a segment is tiny would otherwise crawl (at 1 count/s a
- * drive needs seconds to settle its last counts). Leading by that little
- * bounds the detour from the straight segment by the joint's own step,
- * at most FLOOR_SPEED_DEG_S times the segment's duration. */
-#define FLOOR_SPEED_DEG_S 0.02
-#define FLOOR_ACCEL_DEG_S2 0.04
-
-static uint32_t counts_rate(double deg_rate, double counts_per_deg,
-                            double floor_deg)
-{
-    double v = (deg_rate > floor_deg ? deg_rate : floor_deg) * counts_per_deg;
-    return v < 1.0 ? 1u : v > 4e9 ? 4000000000u : (uint32_t)(v + 0.5);
-}
-
-/* Profile velocity/acceleration of each joint for the segment deltas d so
- * that every joint's trapezoid has the same shape and duration; a joint
- * that does not move gets its full profile (it has nothing to keep pace
- * with). */
-static void segment_profile(const struct qrtcan_master *m, const double d[3],
-                            uint32_t vel[3], uint32_t acc[3])
-{
-    double speed = 1e300, accel = 1e300; /* path parameter per second */
-    int j;
-    for (j = 0; j < QRTCAN_JOINTS; j++) {
-        if (fabs(d[j]) < 1e-9)
-            continue;
-        if (m->cfg.max_speed_deg_s[j] / fabs(d[j]) < speed)
-            speed = m->cfg.max_speed_deg_s[j] / fabs(d[j]);
-        if (m->cfg.max_accel_deg_s2[j] / fabs(d[j]) < accel)
-            accel = m->cfg.max_accel_deg_s2[j] / fabs(d[j]);
-    }
-    for (j = 0; j < QRTCAN_JOINTS; j++) {
-        double c = fabs(m->cfg.scale[j].counts_per_deg);
-        int still = fabs(d[j]) < 1e-9;
-        vel[j] =
-            counts_rate(still ? m->cfg.max_speed_deg_s[j] : fabs(d[j]) * speed,
-                        c, FLOOR_SPEED_DEG_S);
-        acc[j] =
-            counts_rate(still ? m->cfg.max_accel_deg_s2[j] : fabs(d[j]) * accel,
-                        c, FLOOR_ACCEL_DEG_S2);
-    }
-}
-
 /* Targets of the segment from where the drives are to the current
  * waypoint. Alpha's drive position is continuous: its target is the
  * present position plus the short-way step, so crossing +-180 degrees is a
@@ -507,13 +463,13 @@ static int segment_targets(struct qrtcan_master *m, double d[3],
                            int32_t counts[3])
 {
     const double *to = m->path_deg[m->waypoint];
-    double target[3];
+    double target[3], here[3];
     int j;
-    for (j = 0; j < QRTCAN_JOINTS; j++) {
-        double here = joint_deg(m, j);
-        d[j] = j == 0 ? qrt_wrap_deg(to[0] - qrt_wrap_deg(here)) : to[j] - here;
-        target[j] = here + d[j];
-    }
+    for (j = 0; j < QRTCAN_JOINTS; j++)
+        here[j] = joint_deg(m, j);
+    qrtcan_segment_step(here, to, d);
+    for (j = 0; j < QRTCAN_JOINTS; j++)
+        target[j] = here[j] + d[j];
     for (j = 0; j < QRTCAN_JOINTS; j++)
         if (qrtcan_deg_to_counts(&m->cfg.scale[j], target[j], &counts[j]) !=
             QRTCAN_OK)
@@ -668,7 +624,13 @@ static void start_segment(struct qrtcan_master *m, uint64_t now_us)
         fail(m, QRTCAN_REASON_SDO_ABORT, 0, OD_POSITION_ACTUAL, now_us);
         return;
     }
-    segment_profile(m, d, m->segment_profile[0], m->segment_profile[1]);
+    /* the synchronised trapezoid (qrtcan/profile.h), in the drives' counts */
+    if (qrtcan_segment_drive_profile(
+            m->cfg.max_speed_deg_s, m->cfg.max_accel_deg_s2, m->cfg.scale, d,
+            m->segment_profile[0], m->segment_profile[1]) != QRTCAN_OK) {
+        fail(m, QRTCAN_REASON_SDO_ABORT, 0, OD_PROFILE_VELOCITY, now_us);
+        return;
+    }
     for (j = 0; j < QRTCAN_JOINTS; j++) {
         m->segment_profile[2][j] = m->segment_profile[1][j];
         m->drive[j].sdo_step = 0;

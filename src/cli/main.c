@@ -15,6 +15,7 @@
 #include "plan_json.h"
 #include "qrtplan/qrtplan.h"
 #include "scene.h"
+#include "setpoints.h"
 
 /* Every command's synopsis: on stderr for a usage error, and atop the
  * overview of `qrtplan --help`. Each command's own text (`qrtplan COMMAND
@@ -29,6 +30,9 @@ static const char usage[] =
     "                   [--height Z] [--phase DEG] [--start A,S,E] [--goal "
     "A,S,E]\n"
     "                   [--pcd FILE | --pcd-ascii FILE] [-o SCENE.json]\n"
+    "       qrtplan setpoints PLAN.json [--speed DEG_S] [--accel DEG_S2]\n"
+    "                   [--period-ms MS] [--limits-deg a0,a1,s0,s1,e0,e1]\n"
+    "                   [--wrap-alpha] [-o SETPOINTS.csv]\n"
     "       qrtplan COMMAND --help | --help | --version\n";
 
 static const char overview[] =
@@ -36,6 +40,7 @@ static const char overview[] =
     "plan   plan a scene file: the plan as JSON\n"
     "mask   the scene's blocked lattice nodes as JSON\n"
     "gen    write a scene of the paper's obstacle family (its Eq. 13)\n"
+    "setpoints  a plan as a CSV of timed joint set-points\n"
     "\n"
     "qrtplan COMMAND --help prints that command's options. SCENE.json '-'\n"
     "reads the scene from standard input; '-o -' writes to standard output.\n"
@@ -141,6 +146,40 @@ static const char gen_help[] =
     "for a value it refuses (outside the ranges above, more than 1e8 points\n"
     "in all, any number that is not finite), an unknown option or a file\n"
     "it cannot write.\n";
+
+static const char setpoints_help[] =
+    "usage: qrtplan setpoints PLAN.json [--speed DEG_S] [--accel DEG_S2]\n"
+    "                   [--period-ms MS] [--limits-deg a0,a1,s0,s1,e0,e1]\n"
+    "                   [--wrap-alpha] [-o SETPOINTS.csv]\n"
+    "\n"
+    "Write an \"ok\" plan (qrtplan plan's JSON; '-' reads standard input)\n"
+    "as a CSV of timed joint set-points: the motion the CAN master\n"
+    "(qrtpland --can, qrtplan-exec) gives its drives, segment by segment a\n"
+    "straight line in joint space on a trapezoidal profile scaled by each\n"
+    "joint's share of the move, so that all joints start and stop\n"
+    "together (docs/can-master.md, \"The profile\"). Header\n"
+    "t_s,alpha_deg,sigma_deg,eta_deg; a row every period from t_s 0 (the\n"
+    "first waypoint), then one row at the end (the last waypoint). The\n"
+    "segments follow each other without the master's pause between them.\n"
+    "\n"
+    "  --speed DEG_S[,S2,S3]   top joint speed, one for every joint or one\n"
+    "                    each (30; 0.001..10000), as qrtpland's\n"
+    "  --accel DEG_S2[,A2,A3]  joint acceleration = deceleration (60;\n"
+    "                    0.001..10000), as qrtpland's\n"
+    "  --period-ms MS    time between rows (10, the master's SYNC period;\n"
+    "                    0.1..10000)\n"
+    "  --limits-deg a0,a1,s0,s1,e0,e1  the joint limits the waypoints must\n"
+    "                    keep to, as the master checks them (docs/spec.md\n"
+    "                    section Arm: -180,180,-40,180,-180,140)\n"
+    "  --wrap-alpha      alpha in (-180, 180] (default: continuous from the\n"
+    "                    first waypoint's, as the master keeps its drive\n"
+    "                    position, so a move across +-180 degrees never\n"
+    "                    jumps by 360)\n"
+    "  -o SETPOINTS.csv  where to write the CSV ('-': standard output)\n"
+    "\n"
+    "Exit status: 0 when the CSV is written; 2 with one line on stderr for\n"
+    "a plan it cannot use (not ok, a waypoint outside the limits), a bad\n"
+    "option or output it cannot write.\n";
 
 static int fail(const char *file, const char *msg)
 {
@@ -581,6 +620,79 @@ static int cmd_gen(int argc, char **argv)
     return close_output(out, out_path);
 }
 
+static int cmd_setpoints(int argc, char **argv)
+{
+    static double wp[QRTCAN_MASTER_MAX_WAYPOINTS][3];
+    struct setpoint_options o;
+    const char *plan_path = NULL, *out_path = NULL;
+    char err[256];
+    int i, n;
+    FILE *out;
+    setpoints_default(&o);
+    for (i = 0; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        const char *need = NULL;
+        double ms, lim[3][2];
+        if (strcmp(a, "--wrap-alpha") == 0) {
+            o.wrap_alpha = 1;
+            continue;
+        }
+        if (is_scene_arg(a) && !plan_path) {
+            plan_path = a;
+            continue;
+        }
+        if (!v)
+            return fail(NULL, "setpoints: unexpected argument or option "
+                              "without a value (see --help)");
+        i++;
+        if (strcmp(a, "--speed") == 0 || strcmp(a, "--accel") == 0) {
+            if (args_per_joint(v, 1e-3, 1e4,
+                               a[2] == 's' ? o.speed_deg_s : o.accel_deg_s2))
+                need = "0.001..10000, one for every joint or three";
+        } else if (strcmp(a, "--period-ms") == 0) {
+            if (args_number(v, 0.1, 1e4, &ms))
+                need = "milliseconds in 0.1..10000";
+            else
+                o.period_s = ms * 1e-3;
+        } else if (strcmp(a, "--limits-deg") == 0) {
+            if (args_numbers(v, 6, -180.0, 180.0, &lim[0][0]) ||
+                !qrtcan_limits_valid((const double(*)[2])lim))
+                need = "six numbers a0,a1,s0,s1,e0,e1 in -180..180, each "
+                       "low below its high";
+            else
+                memcpy(o.limit_deg, lim, sizeof lim);
+        } else if (strcmp(a, "-o") == 0) {
+            out_path = output_path(v);
+        } else {
+            return fail(NULL, "setpoints: unknown option (see --help)");
+        }
+        if (need) {
+            fprintf(stderr,
+                    "qrtplan: setpoints: bad value '%.40s' for %s (need "
+                    "%s)\n",
+                    v, a, need);
+            return 2;
+        }
+    }
+    if (!plan_path)
+        return fail(NULL, "setpoints: no plan file given (see --help)");
+    n = setpoints_read_plan(plan_path, wp, QRTCAN_MASTER_MAX_WAYPOINTS, err,
+                            sizeof err);
+    if (n < 0)
+        return fail(scene_name(plan_path), err);
+    out = open_output(out_path);
+    if (!out)
+        return fail(out_path, "cannot open for writing");
+    if (setpoints_write(out, (const double(*)[3])wp, n, &o, err, sizeof err)) {
+        if (out_path) {
+            fclose(out);
+            remove(out_path);
+        }
+        return fail(scene_name(plan_path), err);
+    }
+    return close_output(out, out_path);
+}
+
 /* A command's own text when any of its arguments asks for help. */
 static int asks_help(int argc, char **argv)
 {
@@ -606,7 +718,8 @@ int main(int argc, char **argv)
         int (*run)(int, char **);
     } commands[] = {{"plan", plan_help, cmd_plan},
                     {"mask", mask_help, cmd_mask},
-                    {"gen", gen_help, cmd_gen}};
+                    {"gen", gen_help, cmd_gen},
+                    {"setpoints", setpoints_help, cmd_setpoints}};
     size_t k;
     if (argc < 2) {
         fputs(usage, stderr);
