@@ -199,7 +199,15 @@ int qrtpy_plan(void *handle, const double *xyz, long n,
         rc = qrt_planner_plan_now(&h->pl, &s, &g, &plan);
     if (rc != QRT_OK)
         return rc;
-    snprintf(r->detail, sizeof r->detail, "%s", plan.detail);
+    /* the sentence `qrtplan plan` writes (src/cli/plan_json.c) */
+    if (plan.status == QRT_STATUS_CAPACITY && plan.points_dropped > 0)
+        snprintf(r->detail, sizeof r->detail,
+                 "%ld obstacle points dropped: more than the point table "
+                 "holds even as %.0f mm voxels; not planning on a partial "
+                 "cloud",
+                 plan.points_dropped, 1000.0 * plan.voxel_m);
+    else
+        snprintf(r->detail, sizeof r->detail, "%s", plan.detail);
     if (end_check_needed(&plan)) {
         end_check_begin(&c, &h->pl, &h->params.arm, &plan, &s, &g);
         end_check_add(&c, xyz, n);
