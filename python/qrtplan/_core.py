@@ -81,8 +81,9 @@ for name, res, args in [
     ("qrtpy_planner_new", _vp, [_P(Params_c), _P(ctypes.c_int), ctypes.c_char_p,
                                 ctypes.c_size_t]),
     ("qrtpy_planner_free", None, [_vp]),
-    ("qrtpy_plan", ctypes.c_int, [_vp, _dp, ctypes.c_long, _P(Target_c),
-                                  _P(Target_c), ctypes.c_int, _P(Result_c), _dp]),
+    # the arrays by address (ndarray.ctypes.data): cheaper than data_as
+    ("qrtpy_plan", ctypes.c_int, [_vp, _vp, ctypes.c_long, _P(Target_c),
+                                  _P(Target_c), ctypes.c_int, _P(Result_c), _vp]),
     ("qrtpy_arm_default", ctypes.c_int, [_P(Arm_c)]),
     ("qrtpy_arm_validate", ctypes.c_int, [_P(Arm_c)]),
     ("qrtpy_forward_points", ctypes.c_int, [_P(Arm_c), _dp, _dp]),

@@ -111,11 +111,13 @@ def _dp(a: np.ndarray):
     return a.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
 
 
-def as_points(points: Any) -> np.ndarray:
+def as_points(points: Any, check_finite: bool = True) -> np.ndarray:
     """points as a C-contiguous (N, 3) float64 array, checked: float64 is
     used as given (no copy when contiguous); float32 and integer arrays are
     converted (exactly); other dtypes raise InputTypeError; a shape other
-    than (N, 3) (an empty list is (0, 3)), NaN or infinity InvalidInput."""
+    than (N, 3) (an empty list is (0, 3)), NaN or infinity InvalidInput.
+    check_finite False leaves NaN and infinity to the core, which refuses
+    them too (Planner.plan: one pass over the points instead of two)."""
     a = points if isinstance(points, np.ndarray) else np.asarray(points)
     if a.dtype.kind not in "fiu" or a.dtype.itemsize > 8:
         raise InputTypeError(f"points must be float or integer numbers (x, y, z "
@@ -126,14 +128,24 @@ def as_points(points: Any) -> np.ndarray:
         raise InvalidInput(f"points must be an (N, 3) array of x, y, z metres, "
                            f"got shape {a.shape}")
     a = np.ascontiguousarray(a, dtype=np.float64)
+    if check_finite:
+        _check_finite(a)
+    return a
+
+
+def _check_finite(a: np.ndarray) -> None:
     if a.size and not np.isfinite(a).all():
         i = int(np.flatnonzero(~np.isfinite(a).all(axis=1))[0])
         raise InvalidInput(f"points must be finite: row {i} is {a[i].tolist()} "
                            f"(the core: {_core.err_text(-1)})")
-    return a
 
 
 def _three(v: Any, what: str) -> list[float]:
+    if type(v) in (list, tuple) and len(v) == 3 and \
+            all(type(x) in (int, float) for x in v):  # the common case, fast
+        out = [float(x) for x in v]
+        if math.isfinite(out[0] + out[1] + out[2]):
+            return out
     a = v if isinstance(v, np.ndarray) else np.asarray(v)
     if a.dtype.kind not in "fiu":
         raise InputTypeError(f"{what} must be 3 real numbers, not dtype {a.dtype}")
@@ -239,6 +251,8 @@ class Planner:
         self._lock = threading.Lock()
         self._wp = np.empty((_core.MAX_WAYPOINTS, 3))
         self._res = _core.Result_c()
+        self._res_ref = ctypes.byref(self._res)
+        self._wp_ptr = self._wp.ctypes.data
 
     def close(self) -> None:
         """Free the planner's state now (it is freed with the object anyway)."""
@@ -268,20 +282,22 @@ class Planner:
         """
         if not self._h:
             raise QrtError("Planner is closed")
-        pts = as_points(points)
+        pts = as_points(points, check_finite=False)
         s, g = _target(start, "start"), _target(goal, "goal")
         r, wp = self._res, self._wp
         with self._lock:
-            rc = _core.lib.qrtpy_plan(self._h, _dp(pts), pts.shape[0], ctypes.byref(s),
-                                      ctypes.byref(g), int(self.whole_mask),
-                                      ctypes.byref(r), _dp(wp))
+            rc = _core.lib.qrtpy_plan(self._h, pts.ctypes.data, pts.shape[0],
+                                      ctypes.byref(s), ctypes.byref(g),
+                                      self.whole_mask, self._res_ref, self._wp_ptr)
             if rc != 0:
+                if rc == -1:
+                    _check_finite(pts)  # the points' row, when it was them
                 raise error_for(rc, "plan", f"start {_show(s)}, goal {_show(g)}")
             return self._result(r, wp)
 
     @staticmethod
     def _result(r, wp) -> PlanResult:
-        status = _core.lib.qrt_plan_status_name(r.status).decode()
+        status = _STATUS.get(r.status) or _core.lib.qrt_plan_status_name(r.status).decode()
         ok = status == "ok"
         stats = {"points": r.points, "points_ignored": r.points_ignored,
                  "points_dropped": r.points_dropped, "voxel_m": r.voxel_m,
@@ -320,6 +336,9 @@ class Planner:
         q = np.ascontiguousarray(_three(joints_deg, "joints_deg"), dtype=np.float64)
         pts = as_points(points)
         return float(_core.lib.qrtpy_clearance(self._h, _dp(q), _dp(pts), pts.shape[0]))
+
+
+_STATUS = {k: _core.lib.qrt_plan_status_name(k).decode() for k in range(6)}
 
 
 def _ik(facing: int, elbow: int) -> Optional[dict]:
