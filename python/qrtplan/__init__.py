@@ -36,7 +36,19 @@ try:
 except ImportError as _e:  # no numpy yet, or the C layer not built
     _import_error = _e
 
-    def __getattr__(name):
-        if name in ("Planner", "PlanResult", "Joints", "Point", "plan", "plan_scene"):
-            raise ImportError(str(_import_error)) from _import_error
-        raise AttributeError(name)
+    _planner_names = ("Planner", "PlanResult", "Joints", "Point", "plan", "plan_scene")
+
+
+def __getattr__(name):
+    """qrtplan.plan_t etc.: the message types, as lcm-gen's top-level
+    package has them (code written for build/lcmtypes/python keeps working
+    with the installed package)."""
+    if name.endswith("_t") and not name.startswith("_"):
+        from . import lcmtypes
+        try:
+            return getattr(lcmtypes, name)
+        except AttributeError:
+            pass
+    if "_import_error" in globals() and name in _planner_names:
+        raise ImportError(str(_import_error)) from _import_error
+    raise AttributeError(f"module 'qrtplan' has no attribute {name!r}")

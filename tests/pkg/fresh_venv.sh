@@ -23,7 +23,7 @@ py=/usr/bin/python3
 t0=$EPOCHREALTIME
 # one build job: the machine may be shared (CI runs other tests beside it)
 CMAKE_BUILD_PARALLEL_LEVEL=${CMAKE_BUILD_PARALLEL_LEVEL:-1} \
-    "$tmp/venv/bin/python" -m pip install -q --disable-pip-version-check "$tmp/src"
+    "$tmp/venv/bin/python" -m pip install -q --disable-pip-version-check "$tmp/src[lcm]"
 t1=$EPOCHREALTIME
 awk -v a="$t0" -v b="$t1" 'BEGIN { printf "fresh_venv: pip install . took %.1f s\n", b - a }'
 cd "$tmp"
