@@ -7,10 +7,10 @@ One Planner, the points an (N, 3) float64 array made once; every call of
 Planner.plan is timed around it (time.perf_counter) and, inside the C
 layer, around the C work (clock_gettime: points replaced, the plan, the
 result copied out; PlanResult.stats["c_seconds"]). The overhead is what the
-Python call adds: argument checks (shape, dtype, finiteness of the 14,440
-points), the ctypes call, the result's arrays. Prints the medians of both,
+Python call adds: argument checks (shape, dtype; the core checks the
+points' finiteness), the ctypes call, the result's arrays. Prints the medians of both,
 the median of the per-call differences and its ratio to the C median;
-writes build/bench/python_overhead.csv. --check: exit 1 above --limit.
+writes OUT/python_overhead.csv (--out, default build/bench). --check: exit 1 above --limit.
 
     .venv/bin/python tools/bench_python.py [--calls N] [--whole-mask]
 
@@ -44,6 +44,7 @@ def main():
     ap.add_argument("--calls", type=int, default=400)
     ap.add_argument("--whole-mask", action="store_true")
     ap.add_argument("--scene", default=os.path.join(REPO, "scenes", "ten_spheres.json"))
+    ap.add_argument("--out", default=os.path.join(REPO, "build", "bench"))
     ap.add_argument("--check", action="store_true")
     ap.add_argument("--limit", type=float, default=0.10)
     args = ap.parse_args()
@@ -68,7 +69,7 @@ def main():
           f"numpy {np.__version__}, {qrtplan.__file__}")
     print(f"median Python call {mp * 1e3:.3f} ms, C call {mc * 1e3:.3f} ms, "
           f"overhead {md * 1e6:.1f} us = {100 * ratio:.1f} % of the C call")
-    out = os.path.join(REPO, "build", "bench")
+    out = args.out
     os.makedirs(out, exist_ok=True)
     with open(os.path.join(out, "python_overhead.csv"), "w", newline="") as f:
         w = csv.writer(f)
