@@ -237,3 +237,35 @@ def test_lcm_types_round_trip():
     data = m.encode()
     assert plan_request_t.decode(data).encode() == data
     assert plan_t._get_packed_fingerprint()
+
+
+def test_blocked_end_under_merged_points_as_cli(tmp_path):
+    """More points than the exact table (the slot scene of
+    tests/py/test_blocked_detail.py): the core holds merged points and
+    cannot measure the blocked start; the package measures it against the
+    caller's exact points, as the CLI does against the scene's, and both
+    say the same (how clear, never "collides"); with a point inside the
+    margin both say it collides."""
+    sys.path.insert(0, str(ROOT / "tests" / "py"))
+    from test_blocked_detail import slot_points, write_pcd
+    pts = slot_points(int(2.3 * qrtplan._core.MAX_POINTS))
+    for extra in (np.empty((0, 3)), np.array([[0.5, 0.025, 0.0]])):
+        cloud = np.vstack([pts, extra])
+        write_pcd(tmp_path / "slot.pcd", cloud)
+        exact = np.asarray(cloud, np.float32).astype(np.float64)  # as the PCD holds them
+        scene = {"version": 1, "points_file": "slot.pcd",
+                 "start": {"joints_deg": [0.0, 0.0, 0.0]},
+                 "goal": {"joints_deg": [90.0, 40.0, -60.0]}}
+        path = tmp_path / "scene.json"
+        path.write_text(json.dumps(scene))
+        r = subprocess.run([BIN, "plan", str(path)], capture_output=True, text=True,
+                           timeout=300)
+        assert r.returncode == 0, r.stderr
+        cli = json.loads(r.stdout)
+        del cli["stats"]["time_us"]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", qrtplan.planner.CapacityWarning)
+            py = qrtplan.Planner().plan(exact, [0, 0, 0], [90, 40, -60])
+        assert py.status == "start_blocked" and py.end_clearance_m is not None
+        assert ("collides" in py.detail) == (len(extra) > 0), py.detail
+        assert_same(py, cli)
