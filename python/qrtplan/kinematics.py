@@ -11,7 +11,7 @@ Nothing here computes kinematics in Python: every answer is the core's
 from __future__ import annotations
 
 import ctypes
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Mapping, Sequence
 
 import numpy as np

@@ -14,7 +14,7 @@ import ctypes
 import math
 import threading
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Mapping, Optional, Sequence, Union
 
 import numpy as np
@@ -242,8 +242,11 @@ class Planner:
         msg = ctypes.create_string_buffer(512)
         h = _core.lib.qrtpy_planner_new(ctypes.byref(p), ctypes.byref(rc), msg, 512)
         if not h:
-            extra = msg.value.decode() or (
-                "alpha wraps only with a grid that divides 360" if rc.value == -1 else "")
+            # the CLI's sentences (src/cli/main.c, prepare)
+            extra = msg.value.decode() or {
+                -1: "invalid arm, margins or grid_deg (alpha wraps only with a grid "
+                    "that divides 360)",
+                -3: "coarser grid_deg or narrower limits"}.get(rc.value, "")
             raise error_for(rc.value, f"Planner(arm={arm}, margin_m={p.margin_m}, "
                             f"cspace_margin_deg={p.cspace_margin_deg}, "
                             f"grid_deg={p.grid_deg})", extra)
