@@ -269,3 +269,22 @@ def test_blocked_end_under_merged_points_as_cli(tmp_path):
         assert py.status == "start_blocked" and py.end_clearance_m is not None
         assert ("collides" in py.detail) == (len(extra) > 0), py.detail
         assert_same(py, cli)
+
+
+def test_planners_on_threads():
+    """Two planners on two threads (the C call releases the GIL) and one
+    planner shared by both (its lock) give the serial plans."""
+    from concurrent.futures import ThreadPoolExecutor
+    scenes = [json.loads((ROOT / "scenes" / f"{n}.json").read_text())
+              for n in ("three_spheres", "ten_spheres")]
+    pts = [np.asarray(s["points"]) for s in scenes]
+    want = [qrtplan.plan(p, [-90, 0, 0], [90, 0, 0]).waypoints_deg for p in pts]
+    shared = qrtplan.Planner()
+
+    def run(k):
+        own = qrtplan.Planner().plan(pts[k % 2], [-90, 0, 0], [90, 0, 0])
+        common = shared.plan(pts[k % 2], [-90, 0, 0], [90, 0, 0])
+        return k % 2, own.waypoints_deg, common.waypoints_deg
+    with ThreadPoolExecutor(2) as ex:
+        for k, own, common in ex.map(run, range(8)):
+            assert np.array_equal(own, want[k]) and np.array_equal(common, want[k])
