@@ -16,6 +16,7 @@ import signal
 import sys
 import threading
 import time
+import traceback
 
 DEFAULT_URL = "udpm://239.255.76.67:7667?ttl=0"
 
@@ -102,7 +103,12 @@ class Intake:
                     st = dict(self.stats)
                 self.bridge.log_counts(item[2], st)
             else:
-                self.bridge.feed(*item)
+                try:
+                    self.bridge.feed(*item)
+                except Exception:  # one bad message does not end the view
+                    self.stats["errors"] = self.stats.get("errors", 0) + 1
+                    if self.stats["errors"] == 1:
+                        traceback.print_exc()
 
 
 def _arm(scene_path):
@@ -147,7 +153,11 @@ def live(args, bridge):
     end = time.monotonic() + args.duration if args.duration else None
     next_stats = time.monotonic() + 1.0
     while not stop.is_set() and (end is None or time.monotonic() < end):
-        lc.handle_timeout(50)
+        try:
+            lc.handle_timeout(50)
+        except OSError:  # interrupted by the signal that stops us
+            if not stop.is_set():
+                raise
         if time.monotonic() >= next_stats:
             next_stats += 1.0
             with intake.cv:

@@ -304,8 +304,9 @@ class Bridge:
         d = _plain(m)
         d["channel"] = channel
         self.ch_plan_status.log(d, log_time=t)
-        ents = []
+        ents, drawn = [], set()
         if m.status == "ok" and m.n_waypoints > 0:
+            drawn = {"tool_path", "ghosts"}
             w = np.array(m.waypoints_deg, float).reshape(-1, 3)
             tip = np.array([forward_points(self.arm, list(q))[-1]
                             for q in path_samples(w)])
@@ -327,7 +328,7 @@ class Bridge:
                                     id="ghosts", cylinders=cyl, spheres=sph))
         # an empty path where there is none: the old one is withdrawn
         for eid in ("tool_path", "ghosts"):
-            if not any(e.id == eid for e in ents):
+            if eid not in drawn:
                 ents.append(SceneEntity(timestamp=_ts(m.utime),
                                         frame_id=FRAME, id=eid))
         self.ch_plan.log(SceneUpdate(entities=ents), log_time=t)
