@@ -237,13 +237,16 @@ DEMO = ROOT / "build" / "demo"
 @pytest.mark.skipif(not (DEMO / "session.mcap").exists(),
                     reason="make demo has not recorded build/demo/session.mcap")
 def test_demo_session():
-    """make demo's closed loop: every joint state the daemon published (as
-    the demo traced them into can_trace.csv) is in the recording, in order,
-    with the drives' states, beside the ok plan and the obstacle cloud."""
+    """make demo's closed loop: every joint state the daemon published
+    while the demo traced them (can_trace.csv; the recorder started before
+    and stopped after) is in the recording, in order, with the drives'
+    states, beside the ok plan and the obstacle cloud."""
     rec = recording.read(DEMO / "session.mcap")
     with open(DEMO / "can_trace.csv") as f:
         rows = list(csv.DictReader(f))
     got = rec.values("/qrtplan/joint_state")
+    first = [g["utime"] for g in got].index(int(rows[0]["utime"]))
+    got = got[first:first + len(rows)]
     assert [g["utime"] for g in got] == [int(r["utime"]) for r in rows]
     assert np.allclose([g["joints_deg"] for g in got],
                        [[float(r[k]) for k in ("alpha_deg", "sigma_deg",
