@@ -119,6 +119,12 @@ kill "$daemon" "$sim" 2>/dev/null || true
 wait "$daemon" "$sim" 2>/dev/null || true
 sleep 0.5
 kill -INT "$view"
-wait "$view" || rc=1
-.venv/bin/python -m qrtplan.view.render "$out/session.mcap" "$out/session.png" || rc=1
+vrc=0
+wait "$view" || vrc=$?
+[ "$vrc" -eq 0 ] || { echo "qrtplan-view exited with $vrc ($out/view.log)" >&2; rc=1; }
+.venv/bin/python -m qrtplan.view.render "$out/session.mcap" "$out/session.png" ||
+    { echo "session.png: the renderer failed" >&2; rc=1; }
+echo "recorded: $out/session.mcap ($(du -k "$out/session.mcap" | cut -f1) KB;" \
+    "$(tail -n 1 "$out/view.log")), drawn: $out/session.png"
+[ "$rc" -eq 0 ] || echo "closed loop on CAN: exit $rc" >&2
 exit "$rc"

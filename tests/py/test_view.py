@@ -195,6 +195,11 @@ def test_contents_match_the_bus(session, kind):
         for end, q in ((line[0], w[0]), (line[-1], w[-1])):
             assert np.allclose([end.x, end.y, end.z],
                                forward_points(arm, list(q))[-1], atol=1e-9)
+        # alpha the short way across +-180, as the drives move
+        a = np.degrees(np.arctan2([p.y for p in line], [p.x for p in line]))
+        swept = np.abs(bridge.wrap180(np.diff(a))).sum()
+        assert swept == pytest.approx(
+            np.abs(bridge.wrap180(np.diff(w[:, 0]))).sum(), abs=1e-6)
         n_ghosts = min(len(w), 12)
         assert len(ents["ghosts"].cylinders) == 3 * n_ghosts
     # the arm drawn at the joints of each joint state
@@ -212,6 +217,17 @@ def test_scan_points_round_trip():
     p = rng.uniform(-1.5, 1.5, (500, 3))
     q = bridge.scan_points(scan_from_points(p, position=(0.2, -0.1, 0.3)))
     assert np.allclose(q, p, atol=1e-5)
+    # a turned sensor: 30 deg about (1, 2, 3); returns in its own frame
+    axis = np.array([1.0, 2.0, 3.0]) / np.sqrt(14.0)
+    th = np.radians(30.0)
+    w, x, y, z = np.cos(th / 2), *(np.sin(th / 2) * axis)
+    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]],
+                  [-axis[1], axis[0], 0]])
+    R = np.eye(3) + np.sin(th) * K + (1 - np.cos(th)) * K @ K  # Rodrigues
+    pos = np.array([0.2, -0.1, 0.3])
+    s = scan_from_points((p - pos) @ R)  # R^T (p - pos), as rows
+    s.position_m, s.orientation = list(pos), [w, x, y, z]
+    assert np.allclose(bridge.scan_points(s), p, atol=1e-5)
     s = scan_from_points(p)
     s.range_m[0], s.range_m[1], s.range_m[2] = float("nan"), -1.0, 5.0
     s.n = len(s.range_m)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import importlib
 import json
 import math
+import struct
 import numpy as np
 
 import foxglove
@@ -176,13 +177,45 @@ def path_samples(waypoints_deg, step_deg=2.0):
     return np.array(out)
 
 
+class _Scan:
+    """A range_scan_t read straight into numpy arrays: lcm-gen's decode
+    makes Python floats of every return (12 ms for 10^5 here)."""
+    __slots__ = ("utime", "sensor_id", "position_m", "orientation",
+                 "max_range_m", "n", "azimuth_rad", "elevation_rad",
+                 "range_m")
+
+
+def decode_scan(data: bytes) -> _Scan:
+    """An encoded range_scan_t (lcm/range_scan_t.lcm, big-endian) as _Scan;
+    ValueError if it is truncated or not one."""
+    if lcm_type_name(data) != "range_scan_t":
+        raise ValueError("not a range_scan_t")
+    m = _Scan()
+    o = 8
+    (m.utime, k) = struct.unpack_from(">qi", data, o)
+    o += 12
+    if k < 1 or o + k > len(data):
+        raise ValueError("bad sensor_id")
+    m.sensor_id = bytes(data[o:o + k - 1]).decode("utf-8", "replace")
+    o += k
+    v = struct.unpack_from(">7dfi", data, o)
+    o += 7 * 8 + 4 + 4
+    m.position_m, m.orientation, m.max_range_m, m.n = v[0:3], v[3:7], v[7], v[8]
+    if m.n < 0 or o + 12 * m.n > len(data):
+        raise ValueError("truncated range_scan_t")
+    a = np.frombuffer(data, ">f4", 3 * m.n, o).astype(np.float32)
+    m.azimuth_rad, m.elevation_rad, m.range_m = (a[:m.n], a[m.n:2 * m.n],
+                                                 a[2 * m.n:])
+    return m
+
+
 def scan_points(scan) -> np.ndarray:
     """A range_scan_t's returns in the base frame (N x 3, metres); returns
     at or beyond max_range_m, non-positive or not finite are left out."""
-    n = scan.n
-    az = np.asarray(scan.azimuth_rad, np.float64)[:n]
-    el = np.asarray(scan.elevation_rad, np.float64)[:n]
-    r = np.asarray(scan.range_m, np.float64)[:n]
+    n = scan.n  # float32 as sent: for the picture, not for the planner
+    az = np.asarray(scan.azimuth_rad, np.float32)[:n]
+    el = np.asarray(scan.elevation_rad, np.float32)[:n]
+    r = np.asarray(scan.range_m, np.float32)[:n]
     ok = np.isfinite(r) & np.isfinite(az) & np.isfinite(el) & (r > 0) & (
         r < scan.max_range_m)
     az, el, r = az[ok], el[ok], r[ok]
@@ -194,7 +227,8 @@ def scan_points(scan) -> np.ndarray:
         [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
         [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
         [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
-    return p @ R.T + np.asarray(scan.position_m, np.float64)
+    return p @ R.T.astype(np.float32) + np.asarray(scan.position_m,
+                                                   np.float32)
 
 
 def _json_channel(topic, name, ctx):
@@ -265,7 +299,8 @@ class Bridge:
             self._count("not_qrtplan")
             return None
         try:
-            msg = TYPES[name].decode(data)
+            msg = decode_scan(data) if name == "range_scan_t" else \
+                TYPES[name].decode(data)
         except Exception:
             self._count("undecodable")
             return None
