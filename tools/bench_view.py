@@ -23,7 +23,9 @@ import numpy as np
 
 import lcm
 
-from qrtplan.view import bridge, recording
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)),
+                                "..", "python"))
+from qrtplan.view import bridge, recording  # noqa: E402
 
 
 def main():
@@ -46,9 +48,11 @@ def main():
     scan.range_m = rng.uniform(0.3, 3.0, a.points).tolist()
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "bench.mcap")
+        env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+            p for p in (sys.path[0], os.environ.get("PYTHONPATH")) if p))
         view = subprocess.Popen(
             [sys.executable, "-m", "qrtplan.view", "--lcm-url", url, "--mcap",
-             out], stderr=subprocess.PIPE, text=True)
+             out], stderr=subprocess.PIPE, text=True, env=env)
         lc = lcm.LCM(url)
         time.sleep(2.0)  # the bridge subscribed
         t0 = time.monotonic()

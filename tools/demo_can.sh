@@ -35,6 +35,7 @@ fi
 url="udpm://239.255.76.67:7790?ttl=0&recv_buf_size=4194304"
 # the recording: listening before anything is published
 rm -f "$out/session.mcap"
+export PYTHONPATH=python${PYTHONPATH:+:$PYTHONPATH} # the package's source
 .venv/bin/python -m qrtplan.view --lcm-url "$url" --mcap "$out/session.mcap" \
     2>"$out/view.log" &
 view=$!
@@ -52,7 +53,7 @@ done
 build/bin/qrtpland --lcm-url "$url" --can vcan0 --keys "$keys" --speed 60 --accel 120 \
     "${slow[@]}" 2>"$out/qrtpland.log" &
 daemon=$!
-trap 'kill $daemon $sim $view 2>/dev/null; wait 2>/dev/null' EXIT
+trap 'kill $daemon $sim $view 2>/dev/null || true; wait 2>/dev/null' EXIT
 sleep 1 # the recorder subscribed
 rc=0
 QRT_LCMTYPES_PY=build/lcmtypes/python .venv/bin/python - "$url" "$out" <<'PY' || rc=$?

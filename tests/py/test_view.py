@@ -6,6 +6,7 @@ increasing, the joint states and plans equal to the bus's, the tool path
 ending at the plan's goal; and make demo's session.mcap against the joints
 the closed loop traced (skipped when make demo has not run)."""
 import csv
+import json
 import os
 import signal
 import subprocess
@@ -16,14 +17,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import json
-
 import lcm
 
-from qrtplan.kinematics import Arm, forward_points
-from qrtplan.view import bridge, recording
-
 ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "python"))  # the package's source
+from qrtplan.kinematics import Arm, forward_points  # noqa: E402
+from qrtplan.view import bridge, recording  # noqa: E402
+
 DAEMON = Path(os.environ.get("QRTPLAND_BIN", ROOT / "build" / "bin" /
                              "qrtpland"))
 T = bridge.TYPES  # the lcm-gen classes the bridge decodes with

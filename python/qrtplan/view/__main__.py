@@ -55,8 +55,12 @@ class Intake:
     """The LCM thread only stores what arrives: every message but scans in
     a FIFO that is never trimmed, and of scans only the newest unshown one
     of each channel (an older one is counted as replaced). A worker thread
-    shows them, the FIFO first, so a large scan never delays or costs a
-    joint state."""
+    shows them, the FIFO first, so a large scan never costs a joint state;
+    a scan that has waited SCAN_WAIT_NS goes before the FIFO, so that a
+    bridge that cannot keep up (the emulated VM) still draws a scan now
+    and then, its FIFO only growing for a moment."""
+
+    SCAN_WAIT_NS = 250_000_000
 
     def __init__(self, bridge, is_scan):
         self.bridge = bridge
@@ -89,13 +93,16 @@ class Intake:
             with self.cv:
                 while not (self.fifo or self.scans or self.stopping):
                     self.cv.wait(0.5)
-                if self.fifo:
-                    item = self.fifo.popleft()
-                elif self.scans:
-                    ch = next(iter(self.scans))
-                    data, t = self.scans.pop(ch)
-                    item = (ch, data, t)
+                oldest = min(self.scans, key=lambda c: self.scans[c][1],
+                             default=None)
+                if oldest is not None and (not self.fifo or (
+                        time.time_ns() - self.scans[oldest][1] >
+                        self.SCAN_WAIT_NS)):
+                    data, t = self.scans.pop(oldest)
+                    item = (oldest, data, t)
                     self.stats["scans_shown"] += 1
+                elif self.fifo:
+                    item = self.fifo.popleft()
                 else:
                     return  # stopping, and all shown
             if item[1] is None:  # the once-a-second counters
