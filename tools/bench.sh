@@ -33,6 +33,9 @@ if [ -x build/bin/qrtpland ]; then
         --out "$out" | tee -a "$out/table5.txt"
 fi
 
+# the Python package's overhead over its C call (issue 38), 10 x 1444
+.venv/bin/python tools/bench_python.py --out "$out" | tee -a "$out/table5.txt"
+
 # what authenticated LCM costs (issue 35): keyed and unkeyed daemons in turn
 if [ -x build/bin/qrtpland ]; then
     .venv/bin/python tools/bench_auth.py --pairs "${QRT_BENCH_AUTH_PAIRS:-300}" \
