@@ -30,7 +30,7 @@ T = bridge.TYPES  # the lcm-gen classes the bridge decodes with
 PORT = 7350 + os.getpid() % 40  # the daemon tests use 7700..8700
 PY = sys.executable
 ENV = dict(os.environ, PYTHONPATH=os.pathsep.join(
-    p for p in [*sys.path[1:], os.environ.get("PYTHONPATH", "")] if p))
+    p for p in (str(ROOT / "python"), os.environ.get("PYTHONPATH")) if p))
 
 TOPICS = {  # topic -> schema
     "/arm": "foxglove.SceneUpdate",
