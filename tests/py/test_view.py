@@ -272,3 +272,70 @@ def test_demo_session():
     assert rec.count("/obstacles/s0") > 0
     assert any(d["can_state"] not in (None, "off")
                for d in rec.values("/drives"))
+
+
+def _ws_frames(sock, timeout=5.0):
+    """The text frames a WebSocket server sends first (no masking from a
+    server; enough of RFC 6455 for serverInfo and advertise)."""
+    import socket
+    sock.settimeout(timeout)
+    buf = b""
+    while b"\r\n\r\n" not in buf:
+        buf += sock.recv(65536)
+    head, _, rest = buf.partition(b"\r\n\r\n")
+    out, end = [], time.time() + timeout
+    while time.time() < end and len(out) < 2:
+        while len(rest) < 10 and time.time() < end:
+            try:
+                rest += sock.recv(65536)
+            except socket.timeout:
+                break
+        if len(rest) < 2:
+            break
+        n, o = rest[1] & 0x7F, 2
+        if n == 126:
+            n, o = int.from_bytes(rest[2:4], "big"), 4
+        elif n == 127:
+            n, o = int.from_bytes(rest[2:10], "big"), 10
+        while len(rest) < o + n:
+            rest += sock.recv(65536)
+        if rest[0] & 0x0F == 1:
+            out.append(json.loads(rest[o:o + n]))
+        rest = rest[o + n:]
+    return head.split(b"\r\n")[0], out
+
+
+def test_websocket_advertises():
+    """--ws: a Foxglove client's handshake is answered (101), then
+    serverInfo and the advertised topics, the arm among them once a joint
+    state has been seen."""
+    import base64
+    import socket
+    url = f"udpm://239.255.76.67:{PORT + 40}?ttl=0"
+    port = 18700 + os.getpid() % 50
+    view = subprocess.Popen([PY, "-m", "qrtplan.view", "--lcm-url", url,
+                             "--ws", str(port)], env=ENV,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        time.sleep(2.0)
+        js = T["joint_state_t"]()
+        js.utime, js.joints_deg, js.drive_state = now_us(), [1, 2, 3], "x"
+        lcm.LCM(url).publish("QRT_JOINT_STATE", js.encode())
+        time.sleep(0.5)
+        with socket.create_connection(("127.0.0.1", port)) as s:
+            key = base64.b64encode(os.urandom(16)).decode()
+            s.sendall((
+                "GET / HTTP/1.1\r\nHost: localhost\r\nUpgrade: websocket\r\n"
+                "Connection: Upgrade\r\nSec-WebSocket-Version: 13\r\n"
+                f"Sec-WebSocket-Key: {key}\r\n"
+                "Sec-WebSocket-Protocol: foxglove.sdk.v1\r\n\r\n").encode())
+            status, frames = _ws_frames(s)
+    finally:
+        _stop(view)
+    assert b" 101 " in status
+    assert frames[0]["op"] == "serverInfo"
+    assert frames[0]["name"] == "qrtplan-view"
+    topics = {c["topic"]: c for c in frames[1]["channels"]}
+    assert frames[1]["op"] == "advertise"
+    assert topics["/arm"]["schemaName"] == "foxglove.SceneUpdate"
+    assert "/qrtplan/joint_state" in topics
