@@ -148,9 +148,9 @@ def from_log(args, bridge):
 
 def live(args, bridge):
     import lcm
-    from .bridge import carried_type
+    from .bridge import CLOUDS, carried_type
     lc = lcm.LCM(args.lcm_url)
-    intake = Intake(bridge, lambda d: carried_type(d) == "range_scan_t")
+    intake = Intake(bridge, lambda d: carried_type(d) in CLOUDS)
     lc.subscribe(args.channels, intake.on_lcm)
     stop = threading.Event()
     for s in (signal.SIGINT, signal.SIGTERM):

@@ -209,6 +209,37 @@ def decode_scan(data: bytes) -> _Scan:
     return m
 
 
+class _Cloud:
+    __slots__ = ("utime", "sensor_id", "position_m", "orientation", "n",
+                 "x_m", "y_m", "z_m")
+
+
+def decode_cloud(data: bytes) -> _Cloud:
+    """An encoded point_cloud_t (lcm/point_cloud_t.lcm) as _Cloud, its
+    coordinates numpy arrays; ValueError if truncated or not one."""
+    if lcm_type_name(data) != "point_cloud_t":
+        raise ValueError("not a point_cloud_t")
+    m = _Cloud()
+    m.utime, k = struct.unpack_from(">qi", data, 8)
+    o = 20
+    if k < 1 or o + k > len(data):
+        raise ValueError("bad sensor_id")
+    m.sensor_id = bytes(data[o:o + k - 1]).decode("utf-8", "replace")
+    o += k
+    v = struct.unpack_from(">7di", data, o)
+    o += 7 * 8 + 4
+    m.position_m, m.orientation, m.n = v[0:3], v[3:7], v[7]
+    if m.n < 0 or o + 12 * m.n > len(data):
+        raise ValueError("truncated point_cloud_t")
+    a = np.frombuffer(data, ">f4", 3 * m.n, o).astype(np.float32)
+    m.x_m, m.y_m, m.z_m = a[:m.n], a[m.n:2 * m.n], a[2 * m.n:]
+    return m
+
+
+FAST = {"range_scan_t": decode_scan, "point_cloud_t": decode_cloud}
+CLOUDS = tuple(FAST)  # the messages only the newest of which is shown
+
+
 def scan_points(scan) -> np.ndarray:
     """A range_scan_t's returns in the base frame (N x 3, metres); returns
     at or beyond max_range_m, non-positive or not finite are left out."""
@@ -222,13 +253,28 @@ def scan_points(scan) -> np.ndarray:
     ce = np.cos(el)
     p = np.stack([r * ce * np.cos(az), r * ce * np.sin(az), r * np.sin(el)],
                  axis=1)
-    w, x, y, z = scan.orientation
+    return to_base(p, scan.position_m, scan.orientation)
+
+
+def cloud_points(cloud) -> np.ndarray:
+    """A point_cloud_t's points in the base frame (N x 3, metres); points
+    with a coordinate not finite are left out."""
+    n = cloud.n
+    p = np.stack([np.asarray(v, np.float32)[:n]
+                  for v in (cloud.x_m, cloud.y_m, cloud.z_m)], axis=1)
+    p = p[np.isfinite(p).all(axis=1)]
+    return to_base(p, cloud.position_m, cloud.orientation)
+
+
+def to_base(p, position, orientation) -> np.ndarray:
+    """Sensor-frame points (N x 3) in the base frame: turned by the unit
+    quaternion orientation (w, x, y, z), then moved to position."""
+    w, x, y, z = orientation
     R = np.array([
         [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
         [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
         [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
-    return p @ R.T.astype(np.float32) + np.asarray(scan.position_m,
-                                                   np.float32)
+    return p @ R.T.astype(np.float32) + np.asarray(position, np.float32)
 
 
 def _json_channel(topic, name, ctx):
@@ -299,7 +345,7 @@ class Bridge:
             self._count("not_qrtplan")
             return None
         try:
-            msg = decode_scan(data) if name == "range_scan_t" else \
+            msg = FAST[name](data) if name in FAST else \
                 TYPES[name].decode(data)
         except Exception:
             self._count("undecodable")
@@ -377,7 +423,13 @@ class Bridge:
                 f"{m.status}: {m.detail}"), log_time=t)
 
     def _range_scan_t(self, channel, m, t):
-        p = scan_points(m).astype("<f4")
+        self._cloud(m, scan_points(m), t)
+
+    def _point_cloud_t(self, channel, m, t):
+        self._cloud(m, cloud_points(m), t)
+
+    def _cloud(self, m, p, t):
+        p = p.astype("<f4")
         sid = m.sensor_id or "scan"
         ch = self.ch_clouds.get(sid)
         if ch is None:
@@ -397,9 +449,6 @@ class Bridge:
         d = _plain(m)
         d["channel"] = channel
         self.ch_request.log(d, log_time=t)
-
-    def _point_cloud_t(self, channel, m, t):  # pragma: no cover - cloud38's
-        self._count("point_cloud_t_not_drawn")
 
     def _daemon_status_t(self, channel, m, t):
         d = _plain(m)
