@@ -64,8 +64,9 @@ def render(mcap_path, png_path, at_s=None, dpi=80):
             if len(p) > 4000:  # enough to see; keeps the PNG small
                 p = p[np.linspace(0, len(p) - 1, 4000).astype(int)]
             seen.append(p)
+            n = len(cloud.data) // max(cloud.point_stride, 1)
             ax.scatter(p[:, 0], p[:, 1], p[:, 2], s=2, c="crimson",
-                       label=f"{topic} ({cloud.point_stride and len(cloud.data) // cloud.point_stride} points)")
+                       label=f"{topic} ({n} points)")
     plan = None
     for lt, m in rec.messages.get("/plan", []):
         if lt > t:
