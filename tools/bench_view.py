@@ -34,7 +34,7 @@ def main():
     ap.add_argument("--points", type=int, default=100_000)
     ap.add_argument("--scan-hz", type=float, default=20.0)
     ap.add_argument("--joint-hz", type=float, default=20.0)
-    ap.add_argument("--port", type=int, default=7391)
+    ap.add_argument("--port", type=int, default=7297)  # not the tests' ports
     ap.add_argument("--json", action="store_true", help="one JSON line")
     a = ap.parse_args()
     T = bridge.TYPES
