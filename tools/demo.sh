@@ -46,4 +46,5 @@ PY
 echo
 tools/demo_can.sh
 echo
-echo "Plans, masks and pictures: $out/ (*_cspace.png, *_arm.png, can_trace.png)"
+echo "Plans, masks and pictures: $out/ (*_cspace.png, *_arm.png, can_trace.png," \
+    "session.png); the closed loop's recording for Foxglove: $out/session.mcap"

@@ -6,7 +6,9 @@
 # only on evidence younger than --max-scan-age) and the goal as a plan
 # request, plans from the joints the drives report and moves them; the
 # joints it publishes are traced into build/demo/can_trace.csv, checked
-# with the oracle and drawn over the plan (can_trace.png).
+# with the oracle and drawn over the plan (can_trace.png). qrtplan-view
+# records the session (build/demo/session.mcap, docs/view.md) and draws it
+# (session.png).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=build/demo
@@ -30,10 +32,16 @@ if [ "${1:-}" = --in-vm ]; then
     # the VM's emulated CPU delays heartbeats, as in the tests run there
     slow=(--heartbeat-timeout 1500)
 fi
+url="udpm://239.255.76.67:7790?ttl=0&recv_buf_size=4194304"
+# the recording: listening before anything is published
+rm -f "$out/session.mcap"
+export PYTHONPATH=python${PYTHONPATH:+:$PYTHONPATH} # the package's source
+.venv/bin/python -m qrtplan.view --lcm-url "$url" --mcap "$out/session.mcap" \
+    2>"$out/view.log" &
+view=$!
 build/bin/servo_sim --iface vcan0 --start-deg -100,0,0 --servo-error 5 \
     2>"$out/servo_sim.log" &
 sim=$!
-url="udpm://239.255.76.67:7790?ttl=0&recv_buf_size=4194304"
 # the senders' keys (docs/security.md): the daemon moves the arm only on
 # requests and scans authenticated with them
 keys=$out/keys
@@ -45,8 +53,10 @@ done
 build/bin/qrtpland --lcm-url "$url" --can vcan0 --keys "$keys" --speed 60 --accel 120 \
     "${slow[@]}" 2>"$out/qrtpland.log" &
 daemon=$!
-trap 'kill $daemon $sim 2>/dev/null; wait 2>/dev/null' EXIT
-QRT_LCMTYPES_PY=build/lcmtypes/python .venv/bin/python - "$url" "$out" <<'PY'
+trap 'kill $daemon $sim $view 2>/dev/null || true; wait 2>/dev/null' EXIT
+sleep 1 # the recorder subscribed
+rc=0
+QRT_LCMTYPES_PY=build/lcmtypes/python .venv/bin/python - "$url" "$out" <<'PY' || rc=$?
 import csv, os, sys, time
 sys.path[:0] = ["tests/daemon", "tools", "tests/canlink"]
 import conftest as cf, numpy as np, oracle
@@ -105,3 +115,17 @@ fig.tight_layout()
 fig.savefig(os.path.join(out, "can_trace.png"), dpi=110)
 sys.exit(0 if ok and c.min() >= 0 else 1)
 PY
+# the daemon stops, then the recorder closes its file
+kill "$daemon" "$sim" 2>/dev/null || true
+wait "$daemon" "$sim" 2>/dev/null || true
+sleep 0.5
+kill -INT "$view"
+vrc=0
+wait "$view" || vrc=$?
+[ "$vrc" -eq 0 ] || { echo "qrtplan-view exited with $vrc ($out/view.log)" >&2; rc=1; }
+.venv/bin/python -m qrtplan.view.render "$out/session.mcap" "$out/session.png" ||
+    { echo "session.png: the renderer failed" >&2; rc=1; }
+echo "recorded: $out/session.mcap ($(du -k "$out/session.mcap" | cut -f1) KB;" \
+    "$(tail -n 1 "$out/view.log")), drawn: $out/session.png"
+[ "$rc" -eq 0 ] || echo "closed loop on CAN: exit $rc" >&2
+exit "$rc"
