@@ -256,7 +256,7 @@ int qrt_planner_check_path_now(struct qrt_planner *pl,
  * plan was made on. A separate call because it costs more than a small
  * plan: a pass over the points for every sample of the motion.
  * QRT_E_INVALID (plan untouched) for a plan that is not ok. */
-int qrt_planner_certify_clearance(const struct qrt_planner *pl,
+int qrt_planner_certify_clearance(struct qrt_planner *pl,
                                   struct qrt_plan *plan);
 
 /* The clearance of the arm at joints q_deg from the n points xyz (3n

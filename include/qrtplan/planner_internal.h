@@ -140,6 +140,12 @@ struct qrti_sweep_pose {
 
 struct qrt_raster; /* the conversion's tables (src/core/raster.h) */
 
+/* Table entries a block box of qrt_planner_certify_clearance covers (the
+ * core's QRT_CLEARANCE_BLOCK), and how many boxes the table needs. */
+#define QRTI_POINT_BLOCK 64
+#define QRTI_BLOCK_BOXES                                                       \
+    ((QRT_MAX_POINTS + QRTI_POINT_BLOCK - 1) / QRTI_POINT_BLOCK)
+
 struct qrt_planner {
     struct qrt_params params;
     /* params.arm's collision arm (qrt_arm_collision_arm): every collision
@@ -162,6 +168,11 @@ struct qrt_planner {
         float dist[QRT_MAX_NODES];
         int32_t cluster_scratch[QRT_MAX_NODES];
         struct qrti_sweep_pose sweep[QRTI_SWEEP_POSES];
+        /* while qrt_planner_certify_clearance runs: the box of each block
+         * of QRTI_POINT_BLOCK table entries (its least x, y, z, then its
+         * greatest), so that a block far from the arm is passed over
+         * whole */
+        float block_box[QRTI_BLOCK_BOXES][6];
     } search;
     union {
         struct qrti_heap_entry heap[QRT_MAX_NODES]; /* later holds the path */

@@ -25,7 +25,7 @@
  * reaches at q away (like the distance to a point, that changes no faster
  * than the arm moves). */
 static double sample(const struct qrt_arm *arm, const struct qrt_points *pts,
-                     const double q[3], double cap)
+                     const float (*block_box)[6], const double q[3], double cap)
 {
     double p[QRT_CHAIN_MAX + 1][3], radius[QRT_CHAIN_MAX], c = cap;
     int k, n = 3;
@@ -51,7 +51,8 @@ static double sample(const struct qrt_arm *arm, const struct qrt_points *pts,
     }
     if (pts->count == 0)
         return c;
-    return qrt_chain_clearance_capped((const double(*)[3])p, radius, n, pts, c);
+    return qrt_chain_clearance_capped((const double(*)[3])p, radius, n, pts,
+                                      block_box, c);
 }
 
 static double min2(double a, double b)
@@ -62,14 +63,16 @@ static double min2(double a, double b)
 double qrt_path_clearance(const struct qrt_arm *arm,
                           const struct qrt_arm *collision_arm,
                           const struct qrt_points *pts,
-                          const struct qrt_lattice *lat,
+                          const struct qrt_lattice *lat, float (*block_box)[6],
                           const double (*wp_deg)[3], int n)
 {
     double least, lower, c;
     int i;
     if ((pts->count == 0 && pts->far_min2 >= QRT_NO_FAR_POINT) || n < 1)
         return QRT_CLEARANCE_NONE_M;
-    c = sample(arm, pts, wp_deg[0], QRT_CLEARANCE_NONE_M);
+    qrt_points_block_boxes(pts, block_box);
+    c = sample(arm, pts, (const float(*)[6])block_box, wp_deg[0],
+               QRT_CLEARANCE_NONE_M);
     least = lower = c;
     for (i = 1; i < n; i++) {
         double d[3], speed[3], t = 0.0;
@@ -84,7 +87,8 @@ double qrt_path_clearance(const struct qrt_arm *arm,
                 t1 = t + (c - least + QRT_CERTIFY_SLACK_M) / speed[2];
             for (j = 0; j < 3; j++)
                 q[j] = wp_deg[i - 1][j] + t1 * d[j];
-            c1 = sample(arm, pts, q, least + QRT_CERTIFY_CAP_ABOVE_M);
+            c1 = sample(arm, pts, (const float(*)[6])block_box, q,
+                        least + QRT_CERTIFY_CAP_ABOVE_M);
             move = speed[2] * (t1 - t);
             lower = min2(lower, min2(min2(c, c1), 0.5 * (c + c1 - move)));
             least = min2(least, c1);

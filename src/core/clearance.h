@@ -16,11 +16,12 @@
  * reach (pts->far_min2) counts as its distance from the base less how far
  * out the arm reaches along the path. collision_arm bounds how fast any
  * point of the arm moves (its last link reaches the tool's tip).
- * QRT_CLEARANCE_NONE_M when no point was given. */
+ * QRT_CLEARANCE_NONE_M when no point was given. block_box: scratch for
+ * qrt_points_block_boxes. */
 double qrt_path_clearance(const struct qrt_arm *arm,
                           const struct qrt_arm *collision_arm,
                           const struct qrt_points *pts,
-                          const struct qrt_lattice *lat,
+                          const struct qrt_lattice *lat, float (*block_box)[6],
                           const double (*wp_deg)[3], int n);
 
 #endif

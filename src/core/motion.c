@@ -174,9 +174,55 @@ static int mark_in_box(const struct qrt_points *pts, long at,
     return count;
 }
 
+void qrt_points_block_boxes(const struct qrt_points *pts, float (*block_box)[6])
+{
+    long i;
+    for (i = 0; i < pts->count; i += QRT_CLEARANCE_BLOCK) {
+        float *box = block_box[i / QRT_CLEARANCE_BLOCK];
+        long end = i + QRT_CLEARANCE_BLOCK < pts->count
+                       ? i + QRT_CLEARANCE_BLOCK
+                       : pts->count,
+             j;
+        box[0] = box[3] = pts->x[i];
+        box[1] = box[4] = pts->y[i];
+        box[2] = box[5] = pts->z[i];
+        for (j = i + 1; j < end; j++) {
+            box[0] = pts->x[j] < box[0] ? pts->x[j] : box[0];
+            box[1] = pts->y[j] < box[1] ? pts->y[j] : box[1];
+            box[2] = pts->z[j] < box[2] ? pts->z[j] : box[2];
+            box[3] = pts->x[j] > box[3] ? pts->x[j] : box[3];
+            box[4] = pts->y[j] > box[4] ? pts->y[j] : box[4];
+            box[5] = pts->z[j] > box[5] ? pts->z[j] : box[5];
+        }
+    }
+}
+
+/* Can a point of the block box lower best against some capsule of the
+ * chain? Every stored point lies within its float bounds, so within the
+ * box's half-diagonal of its centre (rounded up by a part in 10^6): a
+ * capsule farther than best + that from the centre cannot come nearer. */
+static int box_may_lower(const float box[6], const double (*p)[3],
+                         const double *radius_m, int n, double best)
+{
+    double c[3], h2 = 0.0, h;
+    int j, k;
+    for (j = 0; j < 3; j++) {
+        double half = 0.5 * ((double)box[j + 3] - (double)box[j]);
+        c[j] = 0.5 * ((double)box[j + 3] + (double)box[j]);
+        h2 += half * half;
+    }
+    h = sqrt(h2) * (1.0 + 1e-6) + 1e-9;
+    for (k = 0; k < n; k++) {
+        double reach = best + radius_m[k] + h;
+        if (reach > 0.0 && qrt_seg_dist2(c, p[k], p[k + 1]) < reach * reach)
+            return 1;
+    }
+    return 0;
+}
+
 double qrt_chain_clearance_capped(const double (*p)[3], const double *radius_m,
                                   int n, const struct qrt_points *pts,
-                                  double cap)
+                                  const float (*block_box)[6], double cap)
 {
     struct qrt_point_axes ax = qrt_points_axes(pts);
     double lo[QRT_CHAIN_MAX][3], hi[QRT_CHAIN_MAX][3], arm_lo[3], arm_hi[3],
@@ -206,6 +252,9 @@ double qrt_chain_clearance_capped(const double (*p)[3], const double *radius_m,
         /* the marks are made with the box as it is at the block's start;
          * it only shrinks, so a point out of it then stays out */
         int in[QRT_CLEARANCE_BLOCK], m = QRT_CLEARANCE_BLOCK, b;
+        if (block_box && !box_may_lower(block_box[i / QRT_CLEARANCE_BLOCK], p,
+                                        radius_m, n, best))
+            continue;
         if (pts->count - i < QRT_CLEARANCE_BLOCK) {
             m = (int)(pts->count - i);
             for (b = 0; b < m; b++)
@@ -250,7 +299,7 @@ double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],
     double p[4][3];
     qrt_arm_fk(arm, q_deg, p);
     return qrt_chain_clearance_capped((const double(*)[3])p, radius_m, 3, pts,
-                                      cap);
+                                      NULL, cap);
 }
 
 double qrt_clearance(const struct qrt_arm *arm, const double radius_m[3],

@@ -67,10 +67,19 @@ double qrt_clearance(const struct qrt_arm *arm, const double radius_m[3],
 /* min(clearance, cap) of the chain of n <= QRT_CHAIN_MAX capsules p[0..n]
  * with radii radius_m[0..n-1] against the points (distance minus radius,
  * metres; points farther than cap from every capsule are skipped); where
- * a capsule collides, some value <= 0. */
+ * a capsule collides, some value <= 0. block_box: NULL, or the table's
+ * qrt_points_block_boxes. */
 double qrt_chain_clearance_capped(const double (*p)[3], const double *radius_m,
                                   int n, const struct qrt_points *pts,
-                                  double cap);
+                                  const float (*block_box)[6], double cap);
+
+/* The box of each block of QRT_CLEARANCE_BLOCK entries of the table (its
+ * least x, y, z, then its greatest, as stored), for
+ * qrt_chain_clearance_capped to pass over a block that lies wholly out of
+ * its reach: (count + QRT_CLEARANCE_BLOCK - 1) / QRT_CLEARANCE_BLOCK
+ * boxes. */
+void qrt_points_block_boxes(const struct qrt_points *pts,
+                            float (*block_box)[6]);
 
 /* min(clearance, cap) where the arm is clear of every point, cheaper than
  * qrt_clearance since points farther than cap from the arm are skipped;

@@ -1154,15 +1154,24 @@ double qrt_planner_clearance(const struct qrt_planner *pl,
     return best;
 }
 
-int qrt_planner_certify_clearance(const struct qrt_planner *pl,
-                                  struct qrt_plan *plan)
+/* The block boxes lie in the search scratch, which no call keeps; they
+ * must not make it larger, and cover the blocks the core's clearance
+ * reads. (A negative array size stops the build otherwise.) */
+typedef char
+    qrti_block_boxes_fit[(long)QRTI_BLOCK_BOXES * 6L <= QRT_MAX_NODES &&
+                                 QRTI_POINT_BLOCK == QRT_CLEARANCE_BLOCK
+                             ? 1
+                             : -1];
+
+int qrt_planner_certify_clearance(struct qrt_planner *pl, struct qrt_plan *plan)
 {
     double c;
     if (plan->status != QRT_STATUS_OK || plan->n_waypoints < 1)
         return QRT_E_INVALID;
-    c = qrt_path_clearance(
-        &pl->params.arm, &pl->collision_arm, &pl->points, &pl->mask.lat,
-        (const double(*)[3])plan->waypoints_deg, plan->n_waypoints);
+    c = qrt_path_clearance(&pl->params.arm, &pl->collision_arm, &pl->points,
+                           &pl->mask.lat, pl->search.block_box,
+                           (const double(*)[3])plan->waypoints_deg,
+                           plan->n_waypoints);
     /* never below the margin, which the path's proof already guarantees
      * (the bound can fall short of the true value by its slack) */
     if (c < QRT_CLEARANCE_NONE_M && c < pl->params.margin_m)

@@ -55,7 +55,7 @@
 /* Clearances more than this above the least one so far are not measured
  * exactly (a sample stops looking at points that far away): they only
  * size the next step, and a lower value makes it shorter, never unsafe. */
-#define QRT_CERTIFY_CAP_ABOVE_M 0.25
+#define QRT_CERTIFY_CAP_ABOVE_M 0.05
 
 /* --- the point table's intake (points.c) --- */
 
