@@ -76,13 +76,18 @@ double qrt_path_clearance(const struct qrt_arm *arm,
     least = lower = c;
     for (i = 1; i < n; i++) {
         double d[3], speed[3], t = 0.0;
+        long step, steps;
         int j;
         qrt_motion_delta(lat, wp_deg[i - 1], wp_deg[i], d);
         qrt_motion_link_speeds(collision_arm, d, speed);
         /* the last link's speed bounds every point of the arm: it reaches
-         * farthest from every joint's axis */
-        while (t < 1.0 && speed[2] > 0.0) {
+         * farthest from every joint's axis; every step but the last lets
+         * the arm move at least the slack, which bounds their count */
+        steps = (long)(speed[2] / QRT_CERTIFY_SLACK_M) + 2L;
+        for (step = 0; step < steps; step++) {
             double q[3], c1, move, t1 = 1.0;
+            if (!(t < 1.0))
+                break;
             if (c - least + QRT_CERTIFY_SLACK_M < speed[2] * (1.0 - t))
                 t1 = t + (c - least + QRT_CERTIFY_SLACK_M) / speed[2];
             for (j = 0; j < 3; j++)
@@ -95,6 +100,8 @@ double qrt_path_clearance(const struct qrt_arm *arm,
             c = c1;
             t = t1;
         }
+        if (t < 1.0) /* never (see steps); were it, the rest's own bound */
+            lower = min2(lower, c - speed[2] * (1.0 - t));
     }
     return lower - qrt_points_inflation_m(pts);
 }

@@ -1166,6 +1166,7 @@ typedef char
 int qrt_planner_certify_clearance(struct qrt_planner *pl, struct qrt_plan *plan)
 {
     double c;
+    (void)sizeof(qrti_block_boxes_fit);
     if (plan->status != QRT_STATUS_OK || plan->n_waypoints < 1)
         return QRT_E_INVALID;
     c = qrt_path_clearance(&pl->params.arm, &pl->collision_arm, &pl->points,
