@@ -49,7 +49,7 @@ class Result_c(ctypes.Structure):
                 ("cells_blocked", _L), ("points", _L), ("points_ignored", _L),
                 ("points_dropped", _L), ("voxel_m", _F), ("end_free", _L),
                 ("end_measured", _L), ("end_clearance_m", _F),
-                ("c_seconds", _F), ("detail", ctypes.c_char * 256)]
+                ("has_clearance", _L), ("clearance_m", _F), ("c_seconds", _F), ("detail", ctypes.c_char * 256)]
 
 
 def _find() -> str:

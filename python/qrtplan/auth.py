@@ -103,31 +103,35 @@ class Signer:
 
 
 def scan_sensor_id(data):
-    """The sensor_id of an encoded range_scan_t (fingerprint 8, utime 8,
-    then the string), without decoding the returns."""
+    """The sensor_id of an encoded range_scan_t or point_cloud_t (both:
+    fingerprint 8, utime 8, then the string), without decoding the
+    returns or points."""
     (n,) = struct.unpack_from(">i", data, 16)
     return data[20:20 + n - 1].decode("utf-8", "replace")
 
 
 class SignedPublisher:
     """Publishes as the daemon's trusted senders do: a request with the
-    operator key, a scan with the key named by its sensor_id, a joint state
-    with the joints key. `signers` are Signer objects."""
+    operator key, a scan or a cloud (on the scan or cloud channel, or its
+    NAME_* channels) with the key named by its sensor_id, a joint state with
+    the joints key. `signers` are Signer objects; the channels are the
+    daemon's defaults unless given."""
 
     def __init__(self, lc, signers, request_channel="QRT_PLAN_REQUEST",
-                 scan_channel="QRT_SCAN", joint_channel="QRT_JOINT_STATE"):
+                 scan_channel="QRT_SCAN", joint_channel="QRT_JOINT_STATE",
+                 cloud_channel="QRT_CLOUD"):
         self.lc = lc
         self.by_name = {s.name: s for s in signers}
         self.by_role = {}
         for s in signers:
             self.by_role.setdefault(s.role, s)
-        self.channels = (request_channel, scan_channel, joint_channel)
+        self.channels = (request_channel, scan_channel, joint_channel, cloud_channel)
 
     def signer_for(self, channel, data):
-        req, scan, joints = self.channels
+        req, scan, joints, cloud = self.channels
         if channel == req:
             return self.by_role["operator"]
-        if channel == scan or channel.startswith(scan + "_"):
+        if any(channel == c or channel.startswith(c + "_") for c in (scan, cloud)):
             return self.by_name[scan_sensor_id(data)]
         if channel == joints:
             return self.by_role["joints"]

@@ -6,11 +6,13 @@
         plan = c.plan(goal=[30, 40, -20], timeout=5.0)      # plan_t
         q = c.joint_state(timeout=1.0)                      # joint_state_t
 
-Messages are signed (qrtplan.auth) with the key whose role the daemon
-wants for each channel: the operator's for requests, the scan's sensor_id
-key for scans, the joints key for joint states; without keys they go
-unsigned (a daemon without --keys). Needs the PyPI packages lcm and pynacl
-(`pip install qrtplan[lcm]`).
+publish_points sends a point_cloud_t (points in the sensor's frame, with
+its pose; the default pose makes them base-frame points), publish_scan a
+range_scan_t. Messages are signed (qrtplan.auth) with the key whose role
+the daemon wants for each channel: the operator's for requests, the key
+named by the sensor_id for clouds and scans, the joints key for joint
+states; without keys they go unsigned (a daemon without --keys). Needs the
+PyPI packages lcm and pynacl (`pip install qrtplan[lcm]`).
 """
 from __future__ import annotations
 
@@ -23,15 +25,39 @@ import lcm as _lcm
 import numpy as np
 
 from .lcmtypes import (daemon_status_t, joint_state_t, plan_request_t, plan_t,
-                       range_scan_t)
+                       point_cloud_t, range_scan_t)
 
-__all__ = ["Client", "DEFAULT_URL", "points_to_scan"]
+__all__ = ["Client", "DEFAULT_URL", "points_to_cloud", "points_to_scan"]
 
 DEFAULT_URL = "udpm://239.255.76.67:7667?ttl=0"
 FACING = {"any": plan_request_t.IK_ANY, "front": plan_request_t.IK_FACING_FRONT,
           "back": plan_request_t.IK_FACING_BACK}
 ELBOW = {"any": plan_request_t.IK_ANY, "up": plan_request_t.IK_ELBOW_UP,
          "down": plan_request_t.IK_ELBOW_DOWN}
+
+
+def points_to_cloud(points: Any, sensor_id: str, utime: Optional[int] = None,
+                    position_m: Sequence[float] = (0.0, 0.0, 0.0),
+                    orientation: Sequence[float] = (1.0, 0.0, 0.0, 0.0)
+                    ) -> point_cloud_t:
+    """Points (N, 3 metres) in the sensor's frame as a point_cloud_t from a
+    sensor at position_m (base frame) turned by the unit quaternion
+    orientation (w, x, y, z: sensor -> base); the default pose makes them
+    base-frame points. float32 on the wire (a point moves by up to about
+    6e-8 of its distance from the sensor). The daemon checks the pose."""
+    from .planner import as_points
+    p = as_points(points)
+    c = point_cloud_t()
+    c.utime = time.time_ns() // 1000 if utime is None else int(utime)
+    c.sensor_id = sensor_id
+    c.position_m = [float(v) for v in position_m]
+    c.orientation = [float(v) for v in orientation]
+    if len(c.position_m) != 3 or len(c.orientation) != 4:
+        raise ValueError("position_m: 3 numbers; orientation: 4 (w, x, y, z)")
+    c.n = len(p)
+    f = p.astype(np.float32)
+    c.x_m, c.y_m, c.z_m = f[:, 0].tolist(), f[:, 1].tolist(), f[:, 2].tolist()
+    return c
 
 
 def points_to_scan(points: Any, sensor_id: str, utime: Optional[int] = None,
@@ -65,17 +91,19 @@ class Client:
     def __init__(self, url: str = DEFAULT_URL,
                  keys: Optional[Iterable[Union[str, Any]]] = None, *,
                  request_channel: str = "QRT_PLAN_REQUEST", plan_channel: str = "QRT_PLAN",
-                 scan_channel: str = "QRT_SCAN", joint_channel: str = "QRT_JOINT_STATE",
-                 status_channel: str = "QRT_STATUS"):
+                 scan_channel: str = "QRT_SCAN", cloud_channel: str = "QRT_CLOUD",
+                 joint_channel: str = "QRT_JOINT_STATE", status_channel: str = "QRT_STATUS"):
         self.lc = _lcm.LCM(url)
         self.channels = dict(request=request_channel, plan=plan_channel, scan=scan_channel,
-                             joints=joint_channel, status=status_channel)
+                             cloud=cloud_channel, joints=joint_channel,
+                             status=status_channel)
         self._publisher: Any = self.lc
         if keys is not None:
             from .auth import SignedPublisher, Signer
             signers = [k if isinstance(k, Signer) else Signer(str(k)) for k in keys]
             self._publisher = SignedPublisher(self.lc, signers, request_channel,
-                                              scan_channel, joint_channel)
+                                              scan_channel, joint_channel,
+                                              cloud_channel=cloud_channel)
         self._plans: list[plan_t] = []
         self._joints: Optional[joint_state_t] = None
         self._status: Optional[daemon_status_t] = None
@@ -129,12 +157,22 @@ class Client:
         named by its sensor_id)."""
         self.publish(self.channels["scan"], scan)
 
+    def publish_cloud(self, cloud: point_cloud_t) -> None:
+        """Publish a point_cloud_t on the cloud channel (signed with the key
+        named by its sensor_id)."""
+        self.publish(self.channels["cloud"], cloud)
+
     def publish_points(self, points: Any, sensor_id: str = "points",
-                       utime: Optional[int] = None) -> range_scan_t:
-        """Publish base-frame points as a scan from sensor_id (points_to_scan)."""
-        scan = points_to_scan(points, sensor_id, utime)
-        self.publish_scan(scan)
-        return scan
+                       utime: Optional[int] = None, *,
+                       position_m: Sequence[float] = (0.0, 0.0, 0.0),
+                       orientation: Sequence[float] = (1.0, 0.0, 0.0, 0.0)
+                       ) -> point_cloud_t:
+        """Publish points in the sensor's frame with its pose as a cloud
+        from sensor_id (points_to_cloud); with the default pose, base-frame
+        points. Returns the message sent."""
+        cloud = points_to_cloud(points, sensor_id, utime, position_m, orientation)
+        self.publish_cloud(cloud)
+        return cloud
 
     def request_plan(self, goal: Sequence[float], *, xyz: bool = False,
                      start: Optional[Sequence[float]] = None, facing: str = "any",

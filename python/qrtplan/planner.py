@@ -69,9 +69,11 @@ class PlanResult:
     """A plan (docs/spec.md section Plan). status: "ok", "no_path",
     "start_blocked", "goal_blocked", "unreachable" or "capacity"; detail:
     the core's sentence; waypoints_deg: (M, 3) degrees, (0, 3) unless ok;
-    cost_deg: the path's joint-space length (None unless ok); stats: the
-    CLI's stats without its timings, plus "c_seconds" (the C call's wall
-    time)."""
+    cost_deg: the path's joint-space length (None unless ok); clearance_m:
+    an ok plan's certified clearance in metres (docs/spec.md section
+    Guarantee, Clearance), None when not ok or when no point was given
+    (the CLI's null); stats: the CLI's stats without its timings, plus
+    "c_seconds" (the C call's wall time)."""
     status: str
     detail: str
     waypoints_deg: np.ndarray
@@ -82,6 +84,7 @@ class PlanResult:
     start_ik: Optional[dict] = None
     goal_ik: Optional[dict] = None
     end_clearance_m: Optional[float] = None
+    clearance_m: Optional[float] = None
 
     @property
     def ok(self) -> bool:
@@ -94,6 +97,7 @@ class PlanResult:
         if self.ok:
             d["waypoints_deg"] = self.waypoints_deg.tolist()
             d["cost_deg"] = self.cost_deg
+            d["clearance_m"] = self.clearance_m  # None: the CLI's null
         for key in ("start_deg", "goal_deg"):
             v = getattr(self, key)
             if v is not None:
@@ -320,7 +324,8 @@ class Planner:
         res = PlanResult(status=status, detail=r.detail.decode(),
                          waypoints_deg=wp[:r.n_waypoints].copy() if ok
                          else np.empty((0, 3)),
-                         cost_deg=r.cost_deg if ok else None, stats=stats)
+                         cost_deg=r.cost_deg if ok else None, stats=stats,
+                         clearance_m=r.clearance_m if r.has_clearance else None)
         if status not in ("unreachable", "capacity"):
             res.start_deg = np.array(r.start_deg[:])
             res.start_ik = _ik(r.start_facing, r.start_elbow)

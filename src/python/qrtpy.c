@@ -51,6 +51,11 @@ struct qrtpy_result {
     double voxel_m;
     long end_free, end_measured;
     double end_clearance_m;
+    /* an ok plan's certified clearance (qrt_planner_certify_clearance);
+     * has_clearance 0 when there is none: not ok, or no point given
+     * (QRT_CLEARANCE_NONE_M, the CLI's null) */
+    long has_clearance;
+    double clearance_m;
     double c_seconds; /* wall time inside qrtpy_plan */
     char detail[QRTPY_DETAIL_LEN];
 };
@@ -170,10 +175,11 @@ static double now_s(void)
 
 /* Replace the planner's points with xyz (3n doubles) and plan from start
  * to goal, as `qrtplan plan` does: the plan built as read, or on the whole
- * mask when whole_mask is 1; a blocked end the core could not measure
- * (merged points) is measured against xyz as given, with the CLI's
- * sentence. waypoints receives n_waypoints rows of 3 doubles (room for
- * QRT_MAX_WAYPOINTS). Returns QRT_OK or the core's error. */
+ * mask when whole_mask is 1; an ok plan's clearance certified
+ * (qrt_planner_certify_clearance, inside c_seconds); a blocked end the core
+ * could not measure (merged points) is measured against xyz as given, with
+ * the CLI's sentence. waypoints receives n_waypoints rows of 3 doubles (room
+ * for QRT_MAX_WAYPOINTS). Returns QRT_OK or the core's error. */
 int qrtpy_plan(void *handle, const double *xyz, long n,
                const struct qrtpy_target *start,
                const struct qrtpy_target *goal, int whole_mask,
@@ -199,6 +205,16 @@ int qrtpy_plan(void *handle, const double *xyz, long n,
         rc = qrt_planner_plan_now(&h->pl, &s, &g, &plan);
     if (rc != QRT_OK)
         return rc;
+    /* on the table the plan was made on, as `qrtplan plan` does */
+    r->has_clearance = 0;
+    r->clearance_m = 0.0;
+    if (plan.status == QRT_STATUS_OK) {
+        rc = qrt_planner_certify_clearance(&h->pl, &plan);
+        if (rc != QRT_OK)
+            return rc;
+        r->has_clearance = plan.clearance_m < QRT_CLEARANCE_NONE_M;
+        r->clearance_m = plan.clearance_m;
+    }
     /* the sentence `qrtplan plan` writes (src/cli/plan_json.c) */
     if (plan.status == QRT_STATUS_CAPACITY && plan.points_dropped > 0)
         snprintf(r->detail, sizeof r->detail,

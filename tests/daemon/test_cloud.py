@@ -172,11 +172,12 @@ def test_a_sensor_key_sends_clouds_of_its_own_id_only(daemon):
                         ("s1", "sensor")])
     keys = c.signed.by_name
 
-    def sign(name, msg):
+    def sign(name, msg):  # with a key SignedPublisher would not choose
         return keys[name].seal("QRT_CLOUD", msg.encode())
 
     scene, pts = scene_points("table4_one_sphere.json")
-    c.lc.publish("QRT_CLOUD", sign("s0", cloud_from_points(pts, **POSE)))
+    # c.publish signs a cloud with its sensor_id's key (SignedPublisher)
+    c.publish("QRT_CLOUD", cloud_from_points(pts, **POSE))
     c.publish("QRT_PLAN_REQUEST", request([100, 0, 0], start=[-100, 0, 0],
                                           request_id=1))
     first = c.wait_plan(lambda p: p.request_id == 1)
@@ -196,7 +197,7 @@ def test_a_sensor_key_sends_clouds_of_its_own_id_only(daemon):
     assert "sensor key 's1' sent a cloud of sensor 's0'" in log
     # the sphere is still there (s0's cloud again, fresh): the same request
     # plans the same path
-    c.lc.publish("QRT_CLOUD", sign("s0", cloud_from_points(pts, **POSE)))
+    c.publish("QRT_CLOUD", cloud_from_points(pts, **POSE))
     c.publish("QRT_PLAN_REQUEST", request([100, 0, 0], start=[-100, 0, 0],
                                           request_id=2))
     p = c.wait_plan(lambda p: p.request_id == 2)

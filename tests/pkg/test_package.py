@@ -37,15 +37,20 @@ def cli_plan(scene, tmp_path, *flags):
 
 
 def assert_same(py, cli):
-    """Same status, detail, waypoints (bit for bit: the CLI prints the
-    shortest decimal that reads back exactly), cost and stats (the CLI
-    prints those to 6 decimals)."""
+    """Same status, detail, waypoints and clearance_m (bit for bit: the
+    CLI prints the shortest decimal that reads back exactly; null when
+    there is no point), cost and stats (the CLI prints those to 6
+    decimals)."""
     d = py.to_dict()
     assert d["status"] == cli["status"]
     assert d["detail"] == cli["detail"]
     assert sorted(d) == sorted(cli)
     for key in cli:
-        if key in ("cost_deg", "end_clearance_m"):
+        if key == "clearance_m":  # equal as floats (the CLI prints 0.0 as 0), or both null
+            assert (d[key] is None) == (cli[key] is None), key
+            assert d[key] is None or float(d[key]) == float(cli[key]), key
+            assert d[key] == py.clearance_m
+        elif key in ("cost_deg", "end_clearance_m"):
             assert abs(d[key] - cli[key]) <= 5e-7, key
         elif key == "stats":
             for k, v in cli["stats"].items():
@@ -128,6 +133,9 @@ def test_planner_reused_and_one_shot(tmp_path):
     b = p.plan(np.empty((0, 3)), [-90, 0, 0], [90, 0, 0])  # points replaced
     c = p.plan(pts, qrtplan.Joints(-90, 0, 0), {"joints_deg": [90, 0, 0]})
     assert a.ok and b.ok and len(b.waypoints_deg) == 2
+    # clearance: certified with points (at least the margin), None with none
+    assert isinstance(a.clearance_m, float) and a.clearance_m >= 0.01
+    assert b.clearance_m is None and b.to_dict()["clearance_m"] is None
     assert np.array_equal(a.waypoints_deg, c.waypoints_deg) and a.cost_deg == c.cost_deg
     d = qrtplan.plan(pts, [-90, 0, 0], [90, 0, 0], margin_m=0.01, grid_deg=5)
     assert np.array_equal(a.waypoints_deg, d.waypoints_deg)
@@ -197,6 +205,7 @@ def test_bad_targets_and_settings():
 def test_unreachable_is_a_result():
     r = qrtplan.plan([], [0, 0, 0], qrtplan.Point(5.0, 0, 0))
     assert r.status == "unreachable" and not r.ok and r.cost_deg is None
+    assert r.clearance_m is None and "clearance_m" not in r.to_dict()
     assert r.waypoints_deg.shape == (0, 3) and r.detail
 
 
