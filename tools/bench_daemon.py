@@ -100,17 +100,19 @@ def main():
             ms = (t * 1e6 - u) / 1e3
             lat.append(ms)
             rows.append((u, f"{ms:.3f}", p.status, p.ingest_us, p.mask_us,
-                         p.search_us, p.total_us))
+                         p.search_us, p.certify_us, p.total_us))
         else:
-            rows.append((u, "", "no plan (scan replaced by a newer one)", "", "", "", ""))
+            rows.append((u, "", "no plan (scan replaced by a newer one)", "", "", "",
+                         "", ""))
     path = os.path.join(args.out, "daemon_latency.csv")
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["scan_utime", "latency_ms", "status", "ingest_us", "mask_us",
-                    "search_us", "daemon_total_us"])
+                    "search_us", "certify_us", "daemon_total_us"])
         w.writerows(rows)
     lat = np.array(lat)
     mask = np.array([r[4] for r in rows if r[4] != ""], float) / 1e3
+    certify = np.array([r[6] for r in rows if r[6] != ""], float) / 1e3
     how = ("mask nodes asked as the plan reads them (mask + search)"
            if args.mask == "as-read" else
            f"whole mask on {args.mask_threads} thread(s)")
@@ -118,7 +120,8 @@ def main():
           f"{len(sent)} scans at {args.rate:g} Hz, {how}: median "
           f"{np.median(lat):.2f} ms, p99 {np.percentile(lat, 99):.2f} ms, max "
           f"{lat.max():.2f} ms; {len(sent) - len(lat)} scans without a plan of "
-          f"their own; mask median {np.median(mask):.2f} ms; plans "
+          f"their own; mask median {np.median(mask):.2f} ms, clearance "
+          f"certified median {np.median(certify):.2f} ms; plans "
           f"{dict(collections.Counter(r[2] for r in rows if r[1]))} ({path})")
     return 0
 

@@ -281,7 +281,7 @@ void Daemon::build_mask()
 void Daemon::publish_plan(const qrt_plan *plan, const char *status,
                           const std::string &detail, bool blocked,
                           int64_t ingest, int64_t check, int64_t mask,
-                          int64_t search, int64_t trigger_us)
+                          int64_t search, int64_t certify, int64_t trigger_us)
 {
     qrtplan::plan_t out{};
     out.request_id = goal_.request_id;
@@ -293,6 +293,8 @@ void Daemon::publish_plan(const qrt_plan *plan, const char *status,
     out.check_us = check;
     out.mask_us = mask;
     out.search_us = search;
+    out.certify_us = certify;
+    out.cells_blocked = -1; // no plan: no mask built for it
     if (plan) {
         out.n_waypoints = plan->status == QRT_STATUS_OK ? plan->n_waypoints : 0;
         for (int i = 0; i < out.n_waypoints; i++)
@@ -300,6 +302,9 @@ void Daemon::publish_plan(const qrt_plan *plan, const char *status,
                                          plan->waypoints_deg[i][1],
                                          plan->waypoints_deg[i][2]});
         out.cost_deg = plan->cost_deg;
+        out.clearance_m =
+            plan->status == QRT_STATUS_OK ? plan->clearance_m : 0.0;
+        out.cells_blocked = int32_t(plan->cells_blocked);
         for (int j = 0; j < 3; j++) {
             out.start_deg[j] = plan->start_deg[j];
             out.goal_deg[j] = plan->goal_deg[j];
@@ -455,6 +460,14 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
     if (!have_goal_)
         return; // the picture is kept up to date; nothing to plan for
     qrt_planner_clear_points(pl);
+    // first the nearest point beyond reach of each sensor: the core ignores
+    // them as out of reach (not in the table, not in plan_t.points) but
+    // keeps their least distance from the base, which its clearance
+    // certificate counts for every point ingest dropped. A call of their
+    // own, so that a picture filling the exact table stays exact.
+    picture_.gather_far(&gather_far_);
+    qrt_planner_add_points(pl, gather_far_.data(),
+                           long(gather_far_.size() / 3));
     qrt_planner_add_points(pl, gather_.data(), long(gather_.size() / 3));
 
     std::array<double, 3> here{};
@@ -477,7 +490,7 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
         executing_.clear();
         last_plan_ok_ = false;
         publish_plan(nullptr, ev.status.c_str(), ev.detail, false, t1 - t0, 0,
-                     0, 0, trigger_us);
+                     0, 0, 0, trigger_us);
         return;
     }
     int64_t t_mask = now_us();
@@ -511,7 +524,7 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
                      "no start: the request has none and no joint state has "
                      "been received on " +
                          opts_.joint_channel,
-                     blocked, t1 - t0, now_us() - tc, t2 - t_mask, 0,
+                     blocked, t1 - t0, now_us() - tc, t2 - t_mask, 0, 0,
                      trigger_us);
         return;
     }
@@ -548,7 +561,7 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
         }
         last_plan_ok_ = false;
         publish_plan(nullptr, "invalid_request", why, blocked, t1 - t0,
-                     check_us, mask_us, search_us, trigger_us);
+                     check_us, mask_us, search_us, 0, trigger_us);
         return;
     }
     // a blocked end the core left unmeasured (merged points) is measured
@@ -567,10 +580,20 @@ void Daemon::replan(std::map<std::string, PendingScan> &scans, bool new_request,
             &opts_.params, detail, sizeof detail);
         plan.detail = detail;
     }
+    // an ok plan's clearance, certified against the table it was made on
+    // (the far points included): a stage of its own, as it can cost more
+    // than a small plan (a pass over the points for every sample)
+    int64_t certify_us = 0;
+    if (plan.status == QRT_STATUS_OK) {
+        int64_t tc = now_us();
+        qrt_planner_certify_clearance(pl, &plan);
+        certify_us = now_us() - tc;
+        planner_beat_us_ = CanLink::now_us();
+    }
     last_plan_ok_ = plan.status == QRT_STATUS_OK;
     publish_plan(&plan, qrt_plan_status_name(plan.status),
                  plan.detail ? plan.detail : "", blocked, t1 - t0, check_us,
-                 mask_us, search_us, trigger_us);
+                 mask_us, search_us, certify_us, trigger_us);
     if (plan.status != QRT_STATUS_OK)
         return;
     Path path;
@@ -694,7 +717,7 @@ void Daemon::planner_loop(const RunFlags &flags)
                              "NaN/Inf values, an unknown goal kind or an "
                              "unknown IK branch (ik_facing and ik_elbow are "
                              "0, 1 or 2)",
-                             false, 0, 0, 0, 0, trigger);
+                             false, 0, 0, 0, 0, 0, trigger);
                 have_goal_ = false;
                 last_plan_ok_ = false;
                 continue;
@@ -709,7 +732,7 @@ void Daemon::planner_loop(const RunFlags &flags)
                 last_plan_ok_ = false;
                 executing_.clear();
                 publish_plan(nullptr, ev.status.c_str(), ev.detail, false, 0, 0,
-                             0, 0, now_us());
+                             0, 0, 0, now_us());
                 continue;
             }
         }

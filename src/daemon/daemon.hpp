@@ -91,7 +91,7 @@ class Daemon
     void publish_plan(const qrt_plan *plan, const char *status,
                       const std::string &detail, bool blocked, int64_t ingest,
                       int64_t check, int64_t mask, int64_t search,
-                      int64_t trigger_us);
+                      int64_t certify, int64_t trigger_us);
     bool current_joints(std::array<double, 3> *q);
     void reject(const std::string &why);
     static int64_t now_us();
@@ -159,6 +159,7 @@ class Daemon
     Path executing_;
     bool last_plan_ok_ = false; // so that going stale is published once
     std::vector<double> gather_;
+    std::vector<double> gather_far_; // Picture::gather_far
     long returns_invalid_ = 0; // NaN/Inf or <= 0 ranges of the last ingest
 };
 

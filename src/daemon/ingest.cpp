@@ -94,8 +94,17 @@ void sensor_to_base(const double position[3], const double orientation[4],
     Eigen::Vector3d t(position[0], position[1], position[2]);
     Eigen::Matrix3Xd world = (R * local).colwise() + t;
     // beyond reach: no capsule of the arm, grown by the margin, can touch it
-    Mask near = world.colwise().norm().array().transpose() <= reach_m;
-    out->out_of_reach = long((hit && !near).count());
+    Eigen::ArrayXd dist = world.colwise().norm().array().transpose();
+    Mask near = dist <= reach_m;
+    Mask far = hit && !near;
+    out->out_of_reach = long(far.count());
+    if (out->out_of_reach > 0) {
+        Eigen::Index best = -1;
+        for (Eigen::Index i = 0; i < far.size(); i++)
+            if (far(i) && (best < 0 || dist(i) < dist(best)))
+                best = i;
+        std::memcpy(out->far_xyz, world.col(best).data(), 3 * sizeof(double));
+    }
     hit = hit && near;
     long kept = long(hit.count());
     out->xyz.resize(size_t(kept) * 3);
@@ -114,6 +123,7 @@ void start_points(const std::string &id, int64_t utime, ScanPoints *out)
     out->utime = utime;
     out->xyz.clear();
     out->no_hit = out->invalid = out->out_of_reach = 0;
+    out->far_xyz[0] = out->far_xyz[1] = out->far_xyz[2] = 0.0;
 }
 
 } // namespace
@@ -328,6 +338,27 @@ void Picture::gather(std::vector<double> *xyz) const
     for (const auto &kv : sensors_)
         for (const auto &s : kv.second)
             xyz->insert(xyz->end(), s.xyz.begin(), s.xyz.end());
+}
+
+void Picture::gather_far(std::vector<double> *xyz) const
+{
+    xyz->clear();
+    for (const auto &kv : sensors_) {
+        const double *best = nullptr;
+        double best2 = 0.0;
+        for (const auto &s : kv.second) {
+            if (s.out_of_reach == 0)
+                continue;
+            const double *p = s.far_xyz;
+            double d2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
+            if (!best || d2 < best2) {
+                best = p;
+                best2 = d2;
+            }
+        }
+        if (best)
+            xyz->insert(xyz->end(), best, best + 3);
+    }
 }
 
 Evidence Picture::evidence(int64_t now_us,

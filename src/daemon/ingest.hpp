@@ -24,6 +24,10 @@ struct ScanPoints {
     long no_hit = 0;         // range >= max range (scans only)
     long invalid = 0;        // NaN/Inf angle, range or coordinate, range <= 0
     long out_of_reach = 0;   // farther from the base than the arm can come
+    // the nearest of those (base frame), when out_of_reach > 0: the one
+    // point beyond reach the planner is given, so that its certified
+    // clearance counts the points it never sees (Picture::gather_far)
+    double far_xyz[3] = {0.0, 0.0, 0.0};
 };
 
 // What a sensor sends: a range scan (azimuth, elevation, range) or a point
@@ -85,7 +89,8 @@ std::string check_cloud(const qrtplan::point_cloud_t &cloud, long max_returns);
 // Validates the pose and converts every return (vectorised with Eigen: the
 // trigonometry runs over whole arrays, then one 3xN rotation). Points
 // farther than reach_m from the base are dropped and counted: no part of
-// the arm can come within its margin of them. Returns "" or why the whole
+// the arm can come within its margin of them; the nearest of them is kept
+// in far_xyz. Returns "" or why the whole
 // scan is refused (non-finite or non-unit pose, bad max range, too many
 // returns).
 std::string scan_to_points(const qrtplan::range_scan_t &scan, long max_returns,
@@ -121,6 +126,12 @@ class Picture
     // of every other sensor: dropping those would erase what they saw.
     bool add(ScanPoints &&scan, int64_t now_us);
     void gather(std::vector<double> *xyz) const;
+    // Per sensor, the nearest point beyond reach among its scans in the
+    // picture (sensors with none give none): 3 doubles each. The planner
+    // ignores them as out of reach but keeps their least distance from the
+    // base, which bounds the clearance (qrt_planner_certify_clearance) from
+    // every point ingest dropped. Not counted in points().
+    void gather_far(std::vector<double> *xyz) const;
     long points() const
     {
         return points_;

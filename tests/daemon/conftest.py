@@ -49,6 +49,18 @@ def scan_from_points(points, sensor="s0", position=(0.0, 0.0, 0.0),
     return msg
 
 
+def oracle_plan(plan):
+    """A plan_t as tools/oracle.py's plan dict (the CLI's JSON): with
+    clearance_m (1e9, no point, is the CLI's null) and stats.voxel_m, so
+    that check_path checks the certified clearance of every plan it is
+    given against every point given to it."""
+    return {"status": plan.status,
+            "waypoints_deg": [list(w) for w in plan.waypoints_deg],
+            "cost_deg": plan.cost_deg,
+            "clearance_m": None if plan.clearance_m >= 1e9 else plan.clearance_m,
+            "stats": {"voxel_m": plan.voxel_m}}
+
+
 def quat_rotate(q, v):
     """v (N x 3) turned by the unit quaternion q = (w, x, y, z)."""
     w, u = q[0], np.asarray(q[1:], float)

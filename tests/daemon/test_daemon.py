@@ -7,16 +7,14 @@ import time
 
 import numpy as np
 import oracle
-from conftest import (joint_state_t, now_us, plan_request_t, range_scan_t,
-                      request, scan_from_points, scene_points)
+from conftest import (joint_state_t, now_us, oracle_plan, plan_request_t,
+                      range_scan_t, request, scan_from_points, scene_points)
 
 
 def assert_safe(scene, plan, points):
-    """The independent oracle (tools/oracle.py) on a daemon's plan."""
-    as_json = {"status": plan.status,
-               "waypoints_deg": [list(w) for w in plan.waypoints_deg],
-               "cost_deg": plan.cost_deg}
-    res = oracle.check_path(scene, as_json, points)
+    """The independent oracle (tools/oracle.py) on a daemon's plan, its
+    certified clearance_m included."""
+    res = oracle.check_path(scene, oracle_plan(plan), points)
     assert res.safe, str(res)
     return res
 
@@ -33,9 +31,13 @@ def plan_ten_spheres(daemon, mask):
     assert p.status == "ok", p.detail
     assert p.points == len(pts)
     assert list(p.waypoints_deg[0]) == scene["start"]["joints_deg"]
-    assert p.mask_us > 0 and p.total_us >= p.mask_us + p.search_us
+    assert p.mask_us > 0 and p.certify_us > 0
+    assert p.total_us >= p.mask_us + p.search_us + p.certify_us
     # as read, the rows are built during the search: one stage, in mask_us
     assert (p.search_us == 0) == (mask == "as-read")
+    # the whole mask's blocked nodes; -1 when only the rows read were built
+    assert (p.cells_blocked == -1) == (mask == "as-read"), p.cells_blocked
+    assert mask == "as-read" or p.cells_blocked > 0
     res = assert_safe(scene, p, pts)
     assert res.samples > 100
     return p
@@ -49,6 +51,7 @@ def test_both_mask_modes_plan_the_same(daemon):
     plans = [plan_ten_spheres(daemon, m) for m in ("as-read", "whole")]
     assert [list(w) for w in plans[0].waypoints_deg] == \
         [list(w) for w in plans[1].waypoints_deg]
+    assert plans[0].clearance_m == plans[1].clearance_m
     assert plans[0].cost_deg == plans[1].cost_deg
 
 
@@ -223,11 +226,41 @@ def test_a_tool_from_the_options(daemon):
         assert p is not None, d.text()
         assert p.status == "ok", (flags, p.status, p.detail)
         assert p.points == kept, (flags, p.points)
-        res = oracle.check_path(scene, {
-            "status": p.status,
-            "waypoints_deg": [list(w) for w in p.waypoints_deg],
-            "cost_deg": p.cost_deg}, np.array([point]))
+        res = oracle.check_path(scene, oracle_plan(p), np.array([point]))
         assert res.safe == bool(kept), (flags, str(res))
+
+
+def test_points_beyond_reach_bound_the_clearance(daemon):
+    """Ingest drops points beyond reach before the core sees them; the
+    nearest of each sensor still goes to the core, which ignores it as far
+    but keeps its distance, so clearance_m bounds every point sent. The only
+    point near the path (alpha -60 to 60, the arm straight) is 5 mm beyond
+    reach (0.99 m), 3 cm above the arm's line, in sensor b's scan beside a
+    farther one; sensor a sees only points farther still. The oracle is
+    given all of them: a daemon that gives the core no far point (clearance
+    1e9: null), the farthest of a scan, or one sensor's only, claims more
+    than the least clearance."""
+    near = [0.995, 0.0, 0.03]
+    a_pts = [[1.4, 0.2, 0.1], [0.0, 1.45, 0.2]]
+    b_pts = [near, [1.3, 0.0, 0.0]]
+    scene = {"start": {"joints_deg": [-60, 0, 0]},
+             "goal": {"joints_deg": [60, 0, 0]}}
+    d, c = daemon()
+    c.publish("QRT_SCAN_A", scan_from_points(a_pts, sensor="a"))
+    c.publish("QRT_SCAN_B", scan_from_points(b_pts, sensor="b"))
+    time.sleep(0.2)
+    c.publish("QRT_PLAN_REQUEST", request([60, 0, 0], start=[-60, 0, 0]))
+    p = c.wait_plan()
+    assert p is not None, d.text()
+    assert p.status == "ok", p.detail
+    # the core ignored them: none in its table
+    assert p.points == 0 and p.voxel_m == 0
+    assert p.clearance_m < 1e9 and p.certify_us > 0
+    # the oracle also holds it within 5 mm of the far points' bound (their
+    # least distance less the arm's 0.98 m): not needlessly low
+    assert_safe(scene, p, np.array(a_pts + b_pts))
+    st = c.wait_status(lambda s: s.returns_out_of_reach == 4)
+    assert st.returns_out_of_reach == 4, st.returns_out_of_reach
 
 
 def test_the_log_says_what_the_daemon_made_of_its_options(daemon):

@@ -1,6 +1,7 @@
 // libFuzzer target on qrtpland's message intake: the pre-decode size guard,
 // the lcm-gen decoders of every type the daemon reads, and the scan and
 // cloud checks and conversion (the same bytes tried as each type).
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -47,6 +48,12 @@ static void points_hold(const qrt::SensorMessage &m)
                 sp.xyz[i + 2] * sp.xyz[i + 2] >
             1.0 + 1e-9)
             __builtin_trap(); // beyond reach must be dropped
+    // the nearest point beyond reach: a finite point beyond reach
+    const long far = sp.out_of_reach;
+    const double *f = sp.far_xyz;
+    double f2 = f[0] * f[0] + f[1] * f[1] + f[2] * f[2];
+    if (far > 0 && !(std::isfinite(f2) && f2 > 1.0 - 1e-9))
+        __builtin_trap();
     qrt::Picture pic(0.5, 50000);
     long n = long(sp.xyz.size() / 3);
     bool fits = pic.add(std::move(sp), m.utime());
@@ -57,6 +64,11 @@ static void points_hold(const qrt::SensorMessage &m)
     for (double v : xyz)
         if (!(v == v))
             __builtin_trap(); // NaN must never reach the core
+    // one far point for the sensor when its scan had any, that one
+    pic.gather_far(&xyz);
+    if (xyz.size() != (fits && far > 0 ? 3u : 0u) ||
+        (!xyz.empty() && (xyz[0] != f[0] || xyz[1] != f[1] || xyz[2] != f[2])))
+        __builtin_trap();
 }
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)

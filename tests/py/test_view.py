@@ -182,10 +182,23 @@ def test_contents_match_the_bus(session, kind):
                            np.radians(js.joints_deg))
     plans = [T["plan_t"].decode(d) for d in bus["QRT_PLAN"]]
     got = rec.values("/plan/status")
-    assert [(g["utime"], g["status"], g["n_waypoints"]) for g in got] == \
-        [(p.utime, p.status, p.n_waypoints) for p in plans]
+    assert [(g["utime"], g["status"], g["n_waypoints"], g["clearance_m"],
+             g["cells_blocked"]) for g in got] == \
+        [(p.utime, p.status, p.n_waypoints, p.clearance_m, p.cells_blocked)
+         for p in plans]
     ok = [i for i, p in enumerate(plans) if p.status == "ok"]
     assert ok, [p.status for p in plans]
+    # the daemon's default as-read mask: never whole, never counted; an ok
+    # plan's clearance certified, at least the margin (the sphere is there)
+    assert {p.cells_blocked for p in plans} == {-1}
+    assert all(0.01 <= plans[i].clearance_m < 1e9 for i in ok)
+    # /plan/log: one line per status change, with the clearance for ok
+    lines = [g.message for g in rec.values("/plan/log")]
+    first_ok = plans[ok[0]]
+    assert bridge.plan_summary(first_ok) in lines, lines
+    assert f"clearance {first_ok.clearance_m * 1000:.1f} mm" in \
+        bridge.plan_summary(first_ok)
+    assert all("blocked cells not counted" in x for x in lines), lines
     arm = Arm.default()
     for i in ok:
         scene = rec.values("/plan")[i]
@@ -368,3 +381,17 @@ def test_point_cloud_round_trip():
     c = bridge.decode_cloud(data)
     assert c.sensor_id == "cam" and c.utime == m.utime
     assert np.allclose(bridge.cloud_points(c), p, atol=1e-5)
+
+
+def test_plan_summary_says_clearance_and_blocked_cells():
+    """/plan/log's line: an ok plan's clearance (1e9: no point) and the
+    whole mask's blocked cells (-1: not built), as plan_t gives them."""
+    m = T["plan_t"]()
+    m.request_id, m.status, m.detail = 3, "ok", "a path."
+    m.clearance_m, m.cells_blocked = 1e9, 120
+    assert bridge.plan_summary(m) == \
+        "request 3: ok: a path. [no obstacle point; 120 blocked cells]"
+    m.status, m.clearance_m, m.cells_blocked = "no_path", 0.0, -1
+    assert bridge.plan_summary(m) == ("request 3: no_path: a path. [blocked "
+                                      "cells not counted (whole mask not "
+                                      "built)]")

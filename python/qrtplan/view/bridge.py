@@ -277,6 +277,21 @@ def to_base(p, position, orientation) -> np.ndarray:
     return p @ R.T.astype(np.float32) + np.asarray(position, np.float32)
 
 
+def plan_summary(m) -> str:
+    """What /plan/log says of a plan_t: its status and detail, then an ok
+    plan's certified clearance and the mask's blocked-cell count (-1: the
+    whole mask was not built, as with qrtpland's default --mask as-read)."""
+    extra = []
+    if m.status == "ok":
+        extra.append("no obstacle point" if m.clearance_m >= 1e9 else
+                     f"clearance {m.clearance_m * 1000:.1f} mm")
+    extra.append("blocked cells not counted (whole mask not built)"
+                 if m.cells_blocked < 0 else
+                 f"{m.cells_blocked} blocked cells")
+    return (f"request {m.request_id}: {m.status}: {m.detail} "
+            f"[{'; '.join(extra)}]")
+
+
 def _json_channel(topic, name, ctx):
     """A JSON channel whose schema is named qrtplan.<name> (the fields are
     the LCM message's, docs/daemon.md; plus "channel", the LCM channel)."""
@@ -419,8 +434,7 @@ class Bridge:
             self.ch_plan_log.log(Log(
                 timestamp=_ts(m.utime), level=PLAN_LEVEL.get(
                     m.status, LogLevel.Warning),
-                name="qrtpland", message=f"request {m.request_id}: "
-                f"{m.status}: {m.detail}"), log_time=t)
+                name="qrtpland", message=plan_summary(m)), log_time=t)
 
     def _range_scan_t(self, channel, m, t):
         self._cloud(m, scan_points(m), t)
