@@ -4,19 +4,21 @@
 
 #include <stdlib.h>
 
-/* The shortest decimal that reads back as exactly x: a waypoint on a joint
- * limit must not be printed a hair outside it. */
-static void write_number(FILE *out, double x)
+void format_exact_number(char *buf, double x)
 {
-    char buf[40];
     int digits;
     for (digits = 10; digits < 17; digits++) {
-        snprintf(buf, sizeof buf, "%.*g", digits, x);
+        snprintf(buf, EXACT_NUMBER_LEN, "%.*g", digits, x);
         if (strtod(buf, NULL) == x)
-            break;
+            return;
     }
-    if (digits == 17)
-        snprintf(buf, sizeof buf, "%.17g", x);
+    snprintf(buf, EXACT_NUMBER_LEN, "%.17g", x);
+}
+
+static void write_number(FILE *out, double x)
+{
+    char buf[EXACT_NUMBER_LEN];
+    format_exact_number(buf, x);
     fputs(buf, out);
 }
 

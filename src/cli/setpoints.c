@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "json.h"
+#include "plan_json.h"
 #include "qrtcan/profile.h"
 #include "qrtplan/joints.h"
 
@@ -129,16 +130,9 @@ int setpoints_read_plan(const char *path, double (*wp)[3], int max, char *err,
 static void write_number(FILE *out, double x, int exact)
 {
     char buf[400];
-    int digits;
     size_t len;
     if (exact) {
-        for (digits = 10; digits < 17; digits++) {
-            snprintf(buf, sizeof buf, "%.*g", digits, x);
-            if (strtod(buf, NULL) == x)
-                break;
-        }
-        if (digits == 17)
-            snprintf(buf, sizeof buf, "%.17g", x);
+        format_exact_number(buf, x);
     } else {
         snprintf(buf, sizeof buf, "%.9f", x);
         len = strlen(buf);
