@@ -38,8 +38,8 @@ sys.path[:0] = [os.path.join(REPO, "tools"), os.path.join(REPO, "tests", "daemon
 if "--lcmtypes" in sys.argv:
     os.environ["QRT_LCMTYPES_PY"] = sys.argv[sys.argv.index("--lcmtypes") + 1]
 import conftest as cf  # noqa: E402
-from vm_checks import (DaemonWatch, ScanFeed, check, failures,  # noqa: E402
-                       signing_lcm, trust)
+from vm_checks import (SANITIZED, DaemonWatch, ScanFeed, check,  # noqa: E402
+                       failures, signing_lcm, trust)
 
 
 
@@ -52,7 +52,6 @@ MASTER_NODE = 127  # qrtpland's heartbeat
 # suites set ASAN_OPTIONS or TSAN_OPTIONS), whose daemon on the emulated
 # CPU was seen to leave 305 ms (TSan) and 716 ms (ASan) between heartbeats
 # on the bus: a drive that stops for that is right to, but tests nothing
-SANITIZED = "ASAN_OPTIONS" in os.environ or "TSAN_OPTIONS" in os.environ
 CONSUMER_MS = 1500 if SANITIZED else 300
 ABORT_QUICK_STOP = 3  # 0x6007
 ERRREG_COMM = 0x10

@@ -49,8 +49,8 @@ if "--lcmtypes" in sys.argv:
 import conftest as cf  # noqa: E402
 import oracle  # noqa: E402
 from candump_capture import drain, dropped, start  # noqa: E402
-from vm_checks import (DaemonWatch, ScanFeed, check,  # noqa: E402
-                       failures, stop_daemon_and_drives,
+from vm_checks import (SANITIZER_ARGS, DaemonWatch, ScanFeed,  # noqa: E402
+                       check, failures, stop_daemon_and_drives,
                        signing_lcm, trust)
 
 # TPDO1 of nodes 1 and 2 with too few bytes (candump's spelling)
@@ -96,7 +96,7 @@ def main():
              *trust(args.daemon, args.out),
                                "--speed", "30", "--accel", "60", *DRIVES,
                                # emulated CPU, busy host: heartbeats come late
-                               "--heartbeat-timeout", "1500"],
+                               "--heartbeat-timeout", "1500", *SANITIZER_ARGS],
                               stdout=daemon_log, stderr=subprocess.STDOUT)
     lc = signing_lcm(url)
     watch = DaemonWatch(lc, cf)

@@ -40,8 +40,8 @@ if "--lcmtypes" in sys.argv:
     os.environ["QRT_LCMTYPES_PY"] = sys.argv[sys.argv.index("--lcmtypes") + 1]
 import conftest as cf  # noqa: E402
 import oracle  # noqa: E402
-from vm_checks import (DaemonWatch, ScanFeed, check,  # noqa: E402
-                       failures, joint_gap, stop_daemon_and_drives,
+from vm_checks import (SANITIZER_ARGS, DaemonWatch, ScanFeed,  # noqa: E402
+                       check, failures, joint_gap, stop_daemon_and_drives,
                        signing_lcm, trust)
 
 NOISE_M = 0.002
@@ -73,7 +73,7 @@ def main():
              *trust(args.daemon, args.out),
                                "--speed", "60", "--accel", "120",
                                # emulated CPU, busy host: heartbeats come late
-                               "--heartbeat-timeout", "1500"],
+                               "--heartbeat-timeout", "1500", *SANITIZER_ARGS],
                               stdout=open(log_path, "w"), stderr=subprocess.STDOUT)
     lc = signing_lcm(url)
     watch = DaemonWatch(lc, cf)
