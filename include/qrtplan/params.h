@@ -15,10 +15,17 @@ struct qrt_params {
     double grid_deg;          /* lattice spacing */
     int use_astar;            /* 1: A* (same cost as Dijkstra), 0: Dijkstra */
     int simplify;             /* 1: shortcut the lattice path */
+    /* random configurations the sampled fallback may draw where the
+     * lattice has no path (docs/spec.md section Sampled fallback); 0: no
+     * fallback */
+    long sample_draws;
 };
 
 /* The defaults of docs/spec.md: margin 0.01 m, C-space margin 0, 5 degrees, A*,
- * simplification on. */
+ * simplification on, QRT_SAMPLE_DRAWS_DEFAULT draws. */
+#define QRT_SAMPLE_DRAWS_DEFAULT 2000
+/* Most draws a caller may ask for (qrt_planner_init refuses more). */
+#define QRT_SAMPLE_DRAWS_MAX 1000000L
 void qrt_params_default(struct qrt_params *params);
 
 #ifdef __cplusplus

@@ -116,6 +116,8 @@ struct qrt_plan {
     long start_node, goal_node; /* lattice nodes the path enters and leaves */
     long lattice_path_nodes;
     long nodes_expanded;
+    /* nodes the sampled fallback's trees grew (0: it did not run) */
+    long sampled_nodes;
     long cells_blocked; /* -1 when the whole mask was not built */
     long points, points_ignored, points_dropped;
     double voxel_m; /* 0 while points are exact */

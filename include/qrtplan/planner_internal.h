@@ -140,11 +140,32 @@ struct qrti_sweep_pose {
 
 struct qrt_raster; /* the conversion's tables (src/core/raster.h) */
 
-/* Table entries a block box of qrt_planner_certify_clearance covers (the
- * core's QRT_CLEARANCE_BLOCK), and how many boxes the table needs. */
+/* Table entries a block box covers (the core's QRT_CLEARANCE_BLOCK), blocks
+ * a group box covers, and how many boxes the table needs: one a block,
+ * then one a group (src/core/motion.h, qrt_points_block_boxes). */
 #define QRTI_POINT_BLOCK 64
-#define QRTI_BLOCK_BOXES                                                       \
+#define QRTI_BLOCK_GROUP 64 /* the core's QRT_CLEARANCE_GROUP */
+#define QRTI_POINT_BLOCKS                                                      \
     ((QRT_MAX_POINTS + QRTI_POINT_BLOCK - 1) / QRTI_POINT_BLOCK)
+#define QRTI_BLOCK_BOXES                                                       \
+    (QRTI_POINT_BLOCKS +                                                       \
+     (QRTI_POINT_BLOCKS + QRTI_BLOCK_GROUP - 1) / QRTI_BLOCK_GROUP)
+
+/* A configuration of the sampled fallback's trees (src/core/sampled.h). */
+struct qrti_sampled_node {
+    double q_deg[3];
+    int32_t parent; /* -1 at a root */
+    int32_t tree;   /* 0 grows from the start, 1 from the goal */
+};
+/* Nodes the fallback's trees may hold: 4096, or fewer where the search
+ * scratch they borrow (4 bytes a lattice node) is smaller; each takes 36
+ * bytes (itself and its place on a path), after the block boxes. */
+#define QRTI_SAMPLED_ROOM                                                      \
+    (((long)QRT_MAX_NODES * 4 - (long)QRTI_BLOCK_BOXES * 24) / 36)
+#define QRTI_SAMPLED_NODES                                                     \
+    (QRTI_SAMPLED_ROOM >= 4096 ? 4096                                          \
+     : QRTI_SAMPLED_ROOM >= 2  ? QRTI_SAMPLED_ROOM                             \
+                               : 2)
 
 struct qrt_planner {
     struct qrt_params params;
@@ -155,6 +176,9 @@ struct qrt_planner {
     struct qrt_mask mask;
     double radius_m[3]; /* per-link collision radius the mask was built for */
     long cells_blocked;
+    /* 1 once the table's entries are in Morton order (src/core/order.h),
+     * until points are added or cleared */
+    int points_ordered;
     /* what the mask holds for the points in the table; while a call builds
      * rows as it reads them (lazy_raster set) it is QRT_MASK_PARTIAL */
     enum qrt_mask_state mask_state;
@@ -173,6 +197,13 @@ struct qrt_planner {
          * greatest), so that a block far from the arm is passed over
          * whole */
         float block_box[QRTI_BLOCK_BOXES][6];
+        /* while the sampled fallback runs: the block boxes (the same
+         * place), its trees and the path through them */
+        struct {
+            float block_box[QRTI_BLOCK_BOXES][6];
+            struct qrti_sampled_node node[QRTI_SAMPLED_NODES];
+            int32_t path[QRTI_SAMPLED_NODES];
+        } sampled;
     } search;
     union {
         struct qrti_heap_entry heap[QRT_MAX_NODES]; /* later holds the path */

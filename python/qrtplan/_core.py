@@ -28,7 +28,7 @@ class Params_c(ctypes.Structure):
     _fields_ = [("arm", Arm_c), ("margin_m", ctypes.c_double),
                 ("cspace_margin_deg", ctypes.c_double),
                 ("grid_deg", ctypes.c_double), ("use_astar", ctypes.c_long),
-                ("simplify", ctypes.c_long)]
+                ("simplify", ctypes.c_long), ("sample_draws", ctypes.c_long)]
 
 
 class Target_c(ctypes.Structure):
@@ -46,6 +46,7 @@ class Result_c(ctypes.Structure):
                 ("start_facing", _L), ("start_elbow", _L), ("goal_facing", _L),
                 ("goal_elbow", _L), ("start_node", _L), ("goal_node", _L),
                 ("lattice_path_nodes", _L), ("nodes_expanded", _L),
+                ("sampled_nodes", _L),
                 ("cells_blocked", _L), ("points", _L), ("points_ignored", _L),
                 ("points_dropped", _L), ("voxel_m", _F), ("end_free", _L),
                 ("end_measured", _L), ("end_clearance_m", _F),

@@ -207,9 +207,10 @@ class Planner:
     garbage collection).
 
     arm: an Arm, a scene's "arm" dict, or None for the default arm.
-    margin_m, cspace_margin_deg, grid_deg, use_astar, simplify: the core's
-    parameters (None: the core's defaults, as a scene file that omits
-    them). whole_mask: build the whole C-space mask before every plan
+    margin_m, cspace_margin_deg, grid_deg, use_astar, simplify,
+    sample_draws: the core's parameters (None: the core's defaults, as a
+    scene file that omits them; sample_draws 0: no sampled fallback, as
+    `qrtplan plan --sample-draws 0`). whole_mask: build the whole C-space mask before every plan
     (`qrtplan plan --whole-mask`) instead of only the nodes the plan reads
     (the default; the same plan). Raises InvalidInput, TooBigError or
     AbiError with the core's text when the core refuses the settings.
@@ -219,7 +220,8 @@ class Planner:
                  margin_m: Optional[float] = None,
                  cspace_margin_deg: Optional[float] = None,
                  grid_deg: Optional[float] = None, use_astar: bool = True,
-                 simplify: bool = True, whole_mask: bool = False):
+                 simplify: bool = True, sample_draws: Optional[int] = None,
+                 whole_mask: bool = False):
         self._h = None
         if arm is None:
             arm = Arm.default()
@@ -240,6 +242,14 @@ class Planner:
                     raise InputTypeError(f"{name} must be a number, not {type(v).__name__}")
                 setattr(p, name, float(v))
         p.use_astar, p.simplify = int(bool(use_astar)), int(bool(simplify))
+        if sample_draws is not None:
+            if isinstance(sample_draws, bool) or not isinstance(sample_draws,
+                                                                (int, np.integer)):
+                raise InputTypeError(f"sample_draws must be an int, not "
+                                     f"{type(sample_draws).__name__}")
+            if not 0 <= sample_draws <= 1000000:
+                raise InvalidInput(f"sample_draws {sample_draws} is not in 0 .. 1000000")
+            p.sample_draws = int(sample_draws)
         self.margin_m, self.cspace_margin_deg = p.margin_m, p.cspace_margin_deg
         self.grid_deg, self.whole_mask = p.grid_deg, bool(whole_mask)
         rc = ctypes.c_int()
@@ -308,7 +318,8 @@ class Planner:
         ok = status == "ok"
         stats = {"points": r.points, "points_ignored": r.points_ignored,
                  "points_dropped": r.points_dropped, "voxel_m": r.voxel_m,
-                 "cells_blocked": r.cells_blocked, "nodes_expanded": r.nodes_expanded}
+                 "cells_blocked": r.cells_blocked, "nodes_expanded": r.nodes_expanded,
+                 "sampled_nodes": r.sampled_nodes}
         if ok:
             stats["lattice_cost_deg"] = r.lattice_cost_deg
         stats.update(lattice_path_nodes=r.lattice_path_nodes, start_node=r.start_node,
@@ -373,7 +384,7 @@ _SCENE_KEYS = {"version", "name", "arm", "margin_m", "cspace_margin_deg", "grid_
 def plan_scene(scene: Mapping[str, Any], **options: Any) -> PlanResult:
     """Plan a scene dict (docs/spec.md section Scene) with inline points,
     as `qrtplan plan scene.json` does; options: use_astar, simplify,
-    whole_mask. points_file is not read here: load the points and use
+    sample_draws, whole_mask. points_file is not read here: load the points and use
     Planner.plan."""
     unknown = set(scene) - _SCENE_KEYS
     if unknown:

@@ -23,7 +23,8 @@
 static const char usage[] =
     "usage: qrtplan plan SCENE.json [-o PLAN.json] [--dijkstra] "
     "[--no-simplify]\n"
-    "                    [--whole-mask] [--max-memory BYTES]\n"
+    "                    [--whole-mask] [--sample-draws N] "
+    "[--max-memory BYTES]\n"
     "       qrtplan mask SCENE.json [-o MASK.json] [--max-memory BYTES]\n"
     "       qrtplan gen [--spheres N] [--points K] [--radius R] [--distance "
     "D]\n"
@@ -70,7 +71,8 @@ static const char overview[] =
 static const char plan_help[] =
     "usage: qrtplan plan SCENE.json [-o PLAN.json] [--dijkstra] "
     "[--no-simplify]\n"
-    "                    [--whole-mask] [--max-memory BYTES]\n"
+    "                    [--whole-mask] [--sample-draws N] "
+    "[--max-memory BYTES]\n"
     "\n"
     "Read a scene (arm, margins, grid_deg, points and/or a PCD points_file,\n"
     "start and goal as joints_deg or xyz_m, the latter optionally with\n"
@@ -87,6 +89,9 @@ static const char plan_help[] =
     "  -o PLAN.json      where to write the plan ('-': standard output)\n"
     "  --dijkstra        plain Dijkstra instead of A* (same cost, more work)\n"
     "  --no-simplify     return the lattice path without shortcuts\n"
+    "  --sample-draws N  random configurations the sampled fallback may\n"
+    "                    draw where the lattice has no path (default 2000;\n"
+    "                    0: no fallback, the lattice's answer alone)\n"
     "  --whole-mask      build the whole mask first, then plan on it\n"
     "                    (qrt_planner_build_mask, qrt_planner_plan): the\n"
     "                    same plan, later; stats give cells_blocked and the\n"
@@ -286,6 +291,7 @@ static int fail_budget(const char *name)
 /* The scene's points go straight into the planner as they are read. */
 struct intake {
     int use_astar, simplify;
+    long sample_draws;
     int init_rc, add_rc;
     long add_us;
 };
@@ -296,6 +302,7 @@ static void intake_begin(void *ctx, const struct qrt_params *params)
     struct qrt_params p = *params;
     p.use_astar = in->use_astar;
     p.simplify = in->simplify;
+    p.sample_draws = in->sample_draws;
     in->init_rc = qrt_planner_init(&planner, &p);
 }
 
@@ -313,8 +320,8 @@ static void intake_add(void *ctx, const double *xyz, long n)
 /* Scene -> points in the planner and (build_mask) the mask, within the
  * memory budget. Returns 0 or an exit status. */
 static int prepare(const char *path, struct scene *sc, int use_astar,
-                   int simplify, int build_mask, uint64_t max_memory,
-                   long *convert_us)
+                   int simplify, long sample_draws, int build_mask,
+                   uint64_t max_memory, long *convert_us)
 {
     char err[512];
     long t0;
@@ -324,6 +331,7 @@ static int prepare(const char *path, struct scene *sc, int use_astar,
     budget_init(max_memory, sizeof planner + PROGRAM_BYTES);
     in.use_astar = use_astar;
     in.simplify = simplify;
+    in.sample_draws = sample_draws;
     in.init_rc = QRT_E_INVALID;
     in.add_rc = QRT_OK;
     in.add_us = 0;
@@ -397,6 +405,7 @@ static int cmd_plan(int argc, char **argv)
     struct qrt_plan plan;
     struct stage_times t;
     int use_astar = 1, simplify = 1, whole_mask = 0, i, rc;
+    long sample_draws = QRT_SAMPLE_DRAWS_DEFAULT;
     uint64_t max_memory = DEFAULT_MAX_MEMORY;
     long t_start = now_us(), t1;
     FILE *out;
@@ -410,7 +419,12 @@ static int cmd_plan(int argc, char **argv)
             use_astar = 0;
         else if (strcmp(argv[i], "--no-simplify") == 0)
             simplify = 0;
-        else if (strcmp(argv[i], "--whole-mask") == 0)
+        else if (strcmp(argv[i], "--sample-draws") == 0 && i + 1 < argc) {
+            if (args_long(argv[++i], 10, 0, QRT_SAMPLE_DRAWS_MAX,
+                          &sample_draws) != 0)
+                return fail(NULL, "plan: --sample-draws takes a whole number "
+                                  "from 0 to 1000000");
+        } else if (strcmp(argv[i], "--whole-mask") == 0)
             whole_mask = 1;
         else if (strcmp(argv[i], "--as-read") == 0)
             whole_mask = 0;
@@ -421,8 +435,8 @@ static int cmd_plan(int argc, char **argv)
     }
     if (!scene_path)
         return fail(NULL, "plan: no scene file given (see --help)");
-    rc = prepare(scene_path, &sc, use_astar, simplify, whole_mask, max_memory,
-                 &t.convert_us);
+    rc = prepare(scene_path, &sc, use_astar, simplify, sample_draws, whole_mask,
+                 max_memory, &t.convert_us);
     if (rc)
         return rc;
     t1 = now_us();
@@ -468,7 +482,8 @@ static int cmd_mask(int argc, char **argv)
     }
     if (!scene_path)
         return fail(NULL, "mask: no scene file given (see --help)");
-    rc = prepare(scene_path, &sc, 1, 1, 1, max_memory, &convert_us);
+    rc = prepare(scene_path, &sc, 1, 1, QRT_SAMPLE_DRAWS_DEFAULT, 1, max_memory,
+                 &convert_us);
     if (rc)
         return rc;
     out = open_output(out_path);

@@ -92,9 +92,10 @@ void plan_write_json(FILE *out, const struct qrt_plan *plan,
     fprintf(out,
             "  \"stats\": {\"points\": %ld, \"points_ignored\": %ld, "
             "\"points_dropped\": %ld, \"voxel_m\": %g, \"cells_blocked\": %ld, "
-            "\"nodes_expanded\": %ld, ",
+            "\"nodes_expanded\": %ld, \"sampled_nodes\": %ld, ",
             plan->points, plan->points_ignored, plan->points_dropped,
-            plan->voxel_m, plan->cells_blocked, plan->nodes_expanded);
+            plan->voxel_m, plan->cells_blocked, plan->nodes_expanded,
+            plan->sampled_nodes);
     if (ok)
         fprintf(out, "\"lattice_cost_deg\": %.6f, ", plan->lattice_cost_deg);
     fprintf(out,

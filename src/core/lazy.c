@@ -381,6 +381,20 @@ int qrt_lazy_end(struct qrt_planner *pl)
     return pl->mask_state == QRT_MASK_WHOLE;
 }
 
+void qrt_lazy_renumber(struct qrt_planner *pl, const int32_t *new_place)
+{
+    long c;
+    if (pl->mask_state != QRT_MASK_PARTIAL) /* no cluster is kept */
+        return;
+    for (c = 0; c < pl->lazy_clusters; c++) {
+        const struct qrti_cluster_geom *g = &pl->open.lazy.clusters.t.geom[c];
+        int32_t j;
+        for (j = g->first; j < g->first + g->m; j++)
+            pl->open.lazy.clusters.members[j] =
+                new_place[pl->open.lazy.clusters.members[j]];
+    }
+}
+
 void qrt_lazy_resume(struct qrt_planner *pl, struct qrt_raster *r)
 {
     pl->lazy_raster = r;

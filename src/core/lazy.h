@@ -91,6 +91,11 @@ void qrt_lazy_finish(struct qrt_planner *pl);
  * later qrt_lazy_resume takes them up again. */
 int qrt_lazy_end(struct qrt_planner *pl);
 
+/* The table's entries were moved (order.h): new_place[i] is where the
+ * entry that was at i is now. The kept clusters name their members by
+ * place, so they follow. */
+void qrt_lazy_renumber(struct qrt_planner *pl, const int32_t *new_place);
+
 /* Build rows as they are read again, from the clusters and rows kept by
  * the last qrt_lazy_end, with r set up as for qrt_lazy_begin. */
 void qrt_lazy_resume(struct qrt_planner *pl, struct qrt_raster *r);

@@ -174,27 +174,60 @@ static int mark_in_box(const struct qrt_points *pts, long at,
     return count;
 }
 
+static long block_count(const struct qrt_points *pts)
+{
+    return (pts->count + QRT_CLEARANCE_BLOCK - 1) / QRT_CLEARANCE_BLOCK;
+}
+
+/* Block b's box. */
+static void fill_block_box(const struct qrt_points *pts, long b, float box[6])
+{
+    long i = b * QRT_CLEARANCE_BLOCK,
+         end = i + QRT_CLEARANCE_BLOCK < pts->count ? i + QRT_CLEARANCE_BLOCK
+                                                    : pts->count,
+         j;
+    box[0] = box[3] = pts->x[i];
+    box[1] = box[4] = pts->y[i];
+    box[2] = box[5] = pts->z[i];
+    for (j = i + 1; j < end; j++) {
+        box[0] = pts->x[j] < box[0] ? pts->x[j] : box[0];
+        box[1] = pts->y[j] < box[1] ? pts->y[j] : box[1];
+        box[2] = pts->z[j] < box[2] ? pts->z[j] : box[2];
+        box[3] = pts->x[j] > box[3] ? pts->x[j] : box[3];
+        box[4] = pts->y[j] > box[4] ? pts->y[j] : box[4];
+        box[5] = pts->z[j] > box[5] ? pts->z[j] : box[5];
+    }
+}
+
 void qrt_points_block_boxes(const struct qrt_points *pts, float (*block_box)[6])
 {
-    long i;
-    for (i = 0; i < pts->count; i += QRT_CLEARANCE_BLOCK) {
-        float *box = block_box[i / QRT_CLEARANCE_BLOCK];
-        long end = i + QRT_CLEARANCE_BLOCK < pts->count
-                       ? i + QRT_CLEARANCE_BLOCK
-                       : pts->count,
-             j;
-        box[0] = box[3] = pts->x[i];
-        box[1] = box[4] = pts->y[i];
-        box[2] = box[5] = pts->z[i];
-        for (j = i + 1; j < end; j++) {
-            box[0] = pts->x[j] < box[0] ? pts->x[j] : box[0];
-            box[1] = pts->y[j] < box[1] ? pts->y[j] : box[1];
-            box[2] = pts->z[j] < box[2] ? pts->z[j] : box[2];
-            box[3] = pts->x[j] > box[3] ? pts->x[j] : box[3];
-            box[4] = pts->y[j] > box[4] ? pts->y[j] : box[4];
-            box[5] = pts->z[j] > box[5] ? pts->z[j] : box[5];
+    long i, blocks = block_count(pts);
+    /* after the blocks' boxes, each group's: the box of its blocks' */
+    for (i = 0; i < blocks; i += QRT_CLEARANCE_GROUP) {
+        float *group = block_box[blocks + i / QRT_CLEARANCE_GROUP];
+        long end = i + QRT_CLEARANCE_GROUP < blocks ? i + QRT_CLEARANCE_GROUP
+                                                    : blocks,
+             b;
+        int j;
+        for (b = i; b < end; b++) {
+            fill_block_box(pts, b, block_box[b]);
+            for (j = 0; j < 3; j++) {
+                if (b == i || block_box[b][j] < group[j])
+                    group[j] = block_box[b][j];
+                if (b == i || block_box[b][j + 3] > group[j + 3])
+                    group[j + 3] = block_box[b][j + 3];
+            }
         }
     }
+}
+
+/* Does the box lie wholly outside lo .. hi on some axis? (Then so does
+ * every point in it.) */
+static int box_outside(const float box[6], const double lo[3],
+                       const double hi[3])
+{
+    return box[3] < lo[0] || box[0] > hi[0] || box[4] < lo[1] ||
+           box[1] > hi[1] || box[5] < lo[2] || box[2] > hi[2];
 }
 
 /* Can a point of the block box lower best against some capsule of the
@@ -227,7 +260,7 @@ double qrt_chain_clearance_capped(const double (*p)[3], const double *radius_m,
     struct qrt_point_axes ax = qrt_points_axes(pts);
     double lo[QRT_CHAIN_MAX][3], hi[QRT_CHAIN_MAX][3], arm_lo[3], arm_hi[3],
         near_lo[3], near_hi[3], best = cap, widest = radius_m[0];
-    long i;
+    long i, blocks = block_count(pts), skip_to = 0;
     int k, j;
     for (k = 1; k < n; k++)
         if (radius_m[k] > widest)
@@ -252,9 +285,21 @@ double qrt_chain_clearance_capped(const double (*p)[3], const double *radius_m,
         /* the marks are made with the box as it is at the block's start;
          * it only shrinks, so a point out of it then stays out */
         int in[QRT_CLEARANCE_BLOCK], m = QRT_CLEARANCE_BLOCK, b;
-        if (block_box && !box_may_lower(block_box[i / QRT_CLEARANCE_BLOCK], p,
-                                        radius_m, n, best))
+        long block = i / QRT_CLEARANCE_BLOCK;
+        if (block < skip_to)
             continue;
+        if (block_box != NULL) {
+            /* a group wholly out of the near box: all its blocks out */
+            if (block % QRT_CLEARANCE_GROUP == 0 &&
+                box_outside(block_box[blocks + block / QRT_CLEARANCE_GROUP],
+                            near_lo, near_hi)) {
+                skip_to = block + QRT_CLEARANCE_GROUP;
+                continue;
+            }
+            if (box_outside(block_box[block], near_lo, near_hi) ||
+                !box_may_lower(block_box[block], p, radius_m, n, best))
+                continue;
+        }
         if (pts->count - i < QRT_CLEARANCE_BLOCK) {
             m = (int)(pts->count - i);
             for (b = 0; b < m; b++)
@@ -315,8 +360,21 @@ double qrt_clearance(const struct qrt_arm *arm, const double radius_m[3],
  * quarters, ...), decides the motion. Advancement could never have passed
  * a colliding configuration, so the answer is the same, only sooner. */
 
+static double clearance_boxed(const struct qrt_arm *arm,
+                              const double radius_m[3],
+                              const struct qrt_points *pts,
+                              const float (*block_box)[6], const double q[3],
+                              double cap)
+{
+    double p[4][3];
+    qrt_arm_fk(arm, q, p);
+    return qrt_chain_clearance_capped((const double(*)[3])p, radius_m, 3, pts,
+                                      block_box, cap);
+}
+
 static int has_witness(const struct qrt_arm *arm, const double radius_m[3],
-                       const struct qrt_points *pts, const double a_deg[3],
+                       const struct qrt_points *pts,
+                       const float (*block_box)[6], const double a_deg[3],
                        const double d[3])
 {
     int level, k, j;
@@ -325,7 +383,7 @@ static int has_witness(const struct qrt_arm *arm, const double radius_m[3],
             double q[3], s = (double)k / level;
             for (j = 0; j < 3; j++)
                 q[j] = a_deg[j] + s * d[j];
-            if (qrt_clearance_capped(arm, radius_m, pts, q, 2e-7) <= 1e-7)
+            if (clearance_boxed(arm, radius_m, pts, block_box, q, 2e-7) <= 1e-7)
                 return 1;
         }
     return 0;
@@ -347,6 +405,7 @@ int qrt_motion_collides_at(const struct qrt_arm *arm, const double radius_m[3],
 
 int qrt_motion_free_exact(const struct qrt_arm *arm, const double radius_m[3],
                           const struct qrt_points *pts,
+                          const float (*block_box)[6],
                           const struct qrt_lattice *lat, const double a_deg[3],
                           const double b_deg[3], int max_steps,
                           int witness_after)
@@ -358,15 +417,20 @@ int qrt_motion_free_exact(const struct qrt_arm *arm, const double radius_m[3],
     qrt_motion_link_speeds(arm, d, link_speed);
     speed = link_speed[2];
     for (step = 0; step < max_steps; step++) {
-        double q[3], c;
-        if (step == witness_after && has_witness(arm, radius_m, pts, a_deg, d))
+        double q[3], c, cap;
+        if (step == witness_after &&
+            has_witness(arm, radius_m, pts, block_box, a_deg, d))
             return 0;
         for (j = 0; j < 3; j++)
             q[j] = a_deg[j] + t * d[j];
         /* clearance beyond what carries the arm to b is never needed: a
-         * lower bound is as good as the value for the step */
-        c = qrt_clearance_capped(arm, radius_m, pts, q,
-                                 speed * (1.0 - t) * 1.01 + 1e-6);
+         * lower bound is as good as the value for the step; with block
+         * boxes, capping it lower lets whole blocks be passed over, for a
+         * few more steps */
+        cap = speed * (1.0 - t) * 1.01 + 1e-6;
+        if (block_box != NULL && cap > QRT_BOXED_STEP_CAP_M)
+            cap = QRT_BOXED_STEP_CAP_M;
+        c = clearance_boxed(arm, radius_m, pts, block_box, q, cap);
         if (c <= 1e-7)
             return 0;
         if (speed <= 0.0)

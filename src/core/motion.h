@@ -74,10 +74,11 @@ double qrt_chain_clearance_capped(const double (*p)[3], const double *radius_m,
                                   const float (*block_box)[6], double cap);
 
 /* The box of each block of QRT_CLEARANCE_BLOCK entries of the table (its
- * least x, y, z, then its greatest, as stored), for
- * qrt_chain_clearance_capped to pass over a block that lies wholly out of
- * its reach: (count + QRT_CLEARANCE_BLOCK - 1) / QRT_CLEARANCE_BLOCK
- * boxes. */
+ * least x, y, z, then its greatest, as stored), then the box of each group
+ * of QRT_CLEARANCE_GROUP blocks, for qrt_chain_clearance_capped to pass
+ * over a block or a group that lies wholly out of its reach: B =
+ * (count + QRT_CLEARANCE_BLOCK - 1) / QRT_CLEARANCE_BLOCK boxes, then
+ * (B + QRT_CLEARANCE_GROUP - 1) / QRT_CLEARANCE_GROUP. */
 void qrt_points_block_boxes(const struct qrt_points *pts,
                             float (*block_box)[6]);
 
@@ -96,9 +97,12 @@ double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],
  * motion are searched for a colliding one, which ends a blocked motion's
  * crawl towards the contact (the answer is the same): QRT_WITNESS_AFTER
  * suits motions that are often free (connections advancement proves in a
- * step or two), 0 motions known to be blocked nearly always. */
+ * step or two), 0 motions known to be blocked nearly always. block_box:
+ * NULL, or the table's qrt_points_block_boxes (the same answer, sooner
+ * where whole blocks lie far from the arm). */
 int qrt_motion_free_exact(const struct qrt_arm *arm, const double radius_m[3],
                           const struct qrt_points *pts,
+                          const float (*block_box)[6],
                           const struct qrt_lattice *lat, const double a_deg[3],
                           const double b_deg[3], int max_steps,
                           int witness_after);

@@ -10,7 +10,9 @@
 #include "geom.h"
 #include "lazy.h"
 #include "motion.h"
+#include "order.h"
 #include "raster.h"
+#include "sampled.h"
 #include "search.h"
 #include "sweep.h"
 #include "tuning.h"
@@ -23,6 +25,7 @@ void qrt_params_default(struct qrt_params *params)
     params->grid_deg = 5.0;
     params->use_astar = 1;
     params->simplify = 1;
+    params->sample_draws = QRT_SAMPLE_DRAWS_DEFAULT;
 }
 
 static void copy_joints(double dst[3], const double src[3])
@@ -52,6 +55,8 @@ int qrt_planner_init_abi(struct qrt_planner *pl,
     if (!isfinite(params->cspace_margin_deg) ||
         params->cspace_margin_deg < 0.0 || params->cspace_margin_deg > 45.0)
         return QRT_E_INVALID;
+    if (params->sample_draws < 0 || params->sample_draws > QRT_SAMPLE_DRAWS_MAX)
+        return QRT_E_INVALID;
     rc = qrt_lattice_init(&pl->mask.lat, arm, params->grid_deg);
     if (rc != QRT_OK)
         return rc;
@@ -60,6 +65,7 @@ int qrt_planner_init_abi(struct qrt_planner *pl,
     /* the tool's reach too: a point only the tool can touch is kept */
     qrt_points_reset(&pl->points, qrt_arm_reach_m(arm) + params->margin_m);
     pl->mask_state = QRT_MASK_NONE;
+    pl->points_ordered = 0;
     pl->cells_blocked = 0;
     pl->lazy_clusters = 0;
     pl->lazy_raster = NULL;
@@ -70,6 +76,7 @@ void qrt_planner_clear_points(struct qrt_planner *pl)
 {
     qrt_points_reset(&pl->points, pl->points.reach_m);
     pl->mask_state = QRT_MASK_NONE;
+    pl->points_ordered = 0;
 }
 
 int qrt_planner_add_points(struct qrt_planner *pl, const double *xyz, long n)
@@ -79,7 +86,35 @@ int qrt_planner_add_points(struct qrt_planner *pl, const double *xyz, long n)
      * mask whole, but the kept clusters are given up all the same */
     if (n > 0 && (rc == QRT_OK || pl->mask_state != QRT_MASK_WHOLE))
         pl->mask_state = QRT_MASK_NONE;
+    if (n > 0)
+        pl->points_ordered = 0;
     return rc;
+}
+
+/* The table in Morton order (order.h), for the checks that pass over far
+ * blocks of it (the certificate, the sampled fallback): once per change of
+ * the points, the kept clusters renumbered. Ordering costs more than a
+ * plan's own passes over the points save, so a plan does not order the
+ * table first. Where the scratch is too small the order stays as it came,
+ * which changes no answer. */
+static void order_points(struct qrt_planner *pl)
+{
+    /* the clustering's scratch of parts 0 and 1 (raster_part), idle once
+     * the search is over */
+    int32_t *a = pl->heap_pos, *b = pl->search.cluster_scratch;
+    long room = QRT_MAX_NODES;
+    if (QRTI_OWN_CLUSTER_SCRATCH > 1) {
+        a = pl->cluster_scratch[0];
+        b = pl->cluster_scratch[1];
+        room = QRTI_OWN_CLUSTER_SCRATCH;
+    }
+    if (pl->points_ordered)
+        return;
+    pl->points_ordered = 1;
+    if (qrt_points_order_scratch_len(pl->points.count) > room)
+        return;
+    qrt_points_order(&pl->points, a, b);
+    qrt_lazy_renumber(pl, a);
 }
 
 struct cluster_ctx {
@@ -253,8 +288,8 @@ static void try_end(struct qrt_planner *pl, const double q[3], int ijk[3],
             return;
     qrt_lattice_joints(lat, ijk, node_deg);
     if (!motion_free(pl, q, node_deg) &&
-        !qrt_motion_free_exact(&pl->collision_arm, radius, &pl->points, lat, q,
-                               node_deg, QRT_EXACT_MAX_STEPS,
+        !qrt_motion_free_exact(&pl->collision_arm, radius, &pl->points, NULL,
+                               lat, q, node_deg, QRT_EXACT_MAX_STEPS,
                                QRT_WITNESS_AFTER))
         return;
     ends->node[ends->count] = node;
@@ -442,7 +477,7 @@ resolve_end(struct qrt_planner *pl, const struct qrt_target *t,
 {
     double sols[4][3], radius[3];
     struct qrt_ik_branch branch_of[4];
-    int n, i, any_free = 0;
+    int n, i, first_free = -1;
     *measured = 0;
     *clear_m = 0.0;
     exact_radii(pl, radius);
@@ -455,7 +490,8 @@ resolve_end(struct qrt_planner *pl, const struct qrt_target *t,
         if (!motion_free(pl, s, s) &&
             qrt_clearance(&pl->collision_arm, radius, &pl->points, s) <= 0.0)
             continue;
-        any_free = 1;
+        if (first_free < 0)
+            first_free = i;
         collect_ends(pl, s, ends);
         if (ends->count > 0) {
             copy_joints(q, s);
@@ -463,9 +499,11 @@ resolve_end(struct qrt_planner *pl, const struct qrt_target *t,
             return END_OK;
         }
     }
-    copy_joints(q, sols[0]);
-    *branch = branch_of[0];
-    if (any_free)
+    /* stranded: the first free solution, which the sampled fallback may
+     * still join to the other end */
+    copy_joints(q, sols[first_free >= 0 ? first_free : 0]);
+    *branch = branch_of[first_free >= 0 ? first_free : 0];
+    if (first_free >= 0)
         return END_STRANDED;
     if (pl->points.voxel_m > 0.0)
         return END_UNPROVEN; /* merged: a collision cannot be told */
@@ -608,6 +646,64 @@ static void set_straight_plan(const struct qrt_planner *pl,
     set_status(plan, QRT_STATUS_OK, "straight motion is free");
 }
 
+/* The sampled fallback (sampled.h) where the lattice has no path: 1 when
+ * it decided the plan (a path, or a path too long for the plan table),
+ * 0 when it found none. The path is pulled taut like a lattice route
+ * (emit_route), each shortcut proved the way the edges were. */
+static int sampled_plan(struct qrt_planner *pl, const double qs[3],
+                        const double qg[3], struct qrt_plan *plan)
+{
+    struct qrt_sampled_space sp;
+    const struct qrti_sampled_node *node = pl->search.sampled.node;
+    const int32_t *path = pl->search.sampled.path;
+    int32_t n, anchor = 0, i;
+    double raw = 0.0;
+    if (pl->params.sample_draws <= 0)
+        return 0;
+    order_points(pl);
+    sp.arm = &pl->collision_arm;
+    exact_radii(pl, sp.radius_m);
+    sp.pts = &pl->points;
+    qrt_points_block_boxes(&pl->points, pl->search.sampled.block_box);
+    sp.block_box = (const float(*)[6])pl->search.sampled.block_box;
+    sp.lat = &pl->mask.lat;
+    sp.node = pl->search.sampled.node;
+    sp.path = pl->search.sampled.path;
+    sp.max_nodes = QRTI_SAMPLED_NODES;
+    n = qrt_sampled_connect(&sp, qs, qg, pl->params.sample_draws,
+                            &plan->sampled_nodes);
+    if (n < 2)
+        return 0;
+    for (i = 1; i < n; i++)
+        raw += qrt_arm_joint_distance(&pl->params.arm, node[path[i - 1]].q_deg,
+                                      node[path[i]].q_deg);
+    plan->n_waypoints = 0;
+    append_waypoint(pl, plan, node[path[0]].q_deg, 0);
+    while (anchor < n - 1) {
+        int32_t next = anchor + 1, j;
+        if (pl->params.simplify)
+            for (j = anchor + 2; j < n; j++) {
+                if (!qrt_sampled_motion_free(&sp, node[path[anchor]].q_deg,
+                                             node[path[j]].q_deg))
+                    break;
+                next = j;
+            }
+        if (!append_waypoint(pl, plan, node[path[next]].q_deg, next == n - 1)) {
+            plan->n_waypoints = 0;
+            set_status(plan, QRT_STATUS_CAPACITY,
+                       "the path has more waypoints than the plan table "
+                       "holds");
+            return 1;
+        }
+        anchor = next;
+    }
+    plan->lattice_cost_deg = raw;
+    plan->cost_deg = route_cost(pl, plan);
+    set_status(plan, QRT_STATUS_OK,
+               "path found by sampling (none through the lattice)");
+    return 1;
+}
+
 static void reset_plan(const struct qrt_planner *pl, struct qrt_plan *plan)
 {
     int k;
@@ -623,6 +719,7 @@ static void reset_plan(const struct qrt_planner *pl, struct qrt_plan *plan)
     plan->start_node = plan->goal_node = -1;
     plan->lattice_path_nodes = 0;
     plan->nodes_expanded = 0;
+    plan->sampled_nodes = 0;
     plan->cells_blocked = pl->cells_blocked;
     plan->points = pl->points.count;
     plan->points_ignored = pl->points.ignored_far;
@@ -903,7 +1000,8 @@ static void plan_on_mask(struct qrt_planner *pl, const struct qrt_target *start,
     double qs[3], qg[3];
     struct qrt_ik_branch bs, bg;
     long len;
-    int merged = pl->points.voxel_m > 0.0;
+    int merged = pl->points.voxel_m > 0.0, start_stranded, measured;
+    double clear_m;
 
     reset_plan(pl, plan);
     if (pl->points.dropped > 0) {
@@ -918,23 +1016,34 @@ static void plan_on_mask(struct qrt_planner *pl, const struct qrt_target *start,
         copy_joints(plan->start_deg, qs);
         plan->start_ik = bs;
     }
-    if (o != END_OK) {
-        plan->end_free = o == END_STRANDED;
+    if (o != END_OK && o != END_STRANDED) {
         set_status(
             plan, end_status(o, 0),
             end_detail(o, 0, start, merged, pl->params.arm.tool_m > 0.0));
         return;
     }
-    o = resolve_end(pl, goal, qs, qg, &bg, &goals, &plan->end_measured,
-                    &plan->end_clearance_m);
+    start_stranded = o == END_STRANDED;
+    o = resolve_end(pl, goal, qs, qg, &bg, &goals, &measured, &clear_m);
     if (o != END_UNREACHABLE) {
         copy_joints(plan->goal_deg, qg);
         plan->goal_ik = bg;
     }
-    if (o != END_OK) {
+    /* a free end the lattice cannot join: the sampled fallback may join
+     * the two ends without it; else the first end that failed is told */
+    if (start_stranded || o != END_OK) {
+        if ((o == END_OK || o == END_STRANDED) &&
+            sampled_plan(pl, qs, qg, plan))
+            return;
+        if (start_stranded)
+            o = END_STRANDED;
+        else {
+            plan->end_measured = measured;
+            plan->end_clearance_m = clear_m;
+        }
         plan->end_free = o == END_STRANDED;
-        set_status(plan, end_status(o, 1),
-                   end_detail(o, 1, goal, merged, pl->params.arm.tool_m > 0.0));
+        set_status(plan, end_status(o, !start_stranded),
+                   end_detail(o, !start_stranded, start_stranded ? start : goal,
+                              merged, pl->params.arm.tool_m > 0.0));
         return;
     }
 
@@ -947,8 +1056,12 @@ static void plan_on_mask(struct qrt_planner *pl, const struct qrt_target *start,
     qrt_search(pl, &seeds, &goals, pl->params.use_astar, &res);
     plan->nodes_expanded = res.expanded;
     if (!res.found) {
-        set_status(plan, QRT_STATUS_NO_PATH,
-                   "no collision-free path through the lattice");
+        if (!sampled_plan(pl, qs, qg, plan))
+            set_status(plan, QRT_STATUS_NO_PATH,
+                       pl->params.sample_draws > 0
+                           ? "no collision-free path through the lattice, "
+                             "and none found by sampling"
+                           : "no collision-free path through the lattice");
         return;
     }
     len = qrt_search_path(pl, res.goal_node);
@@ -1050,7 +1163,7 @@ static int segment_blocked(const struct qrt_planner *pl, const double a[3],
         qrt_motion_collides_at(&pl->collision_arm, radius, &pl->points,
                                &pl->mask.lat, a, b, 1.0))
         return 1;
-    return !qrt_motion_free_exact(&pl->collision_arm, radius, &pl->points,
+    return !qrt_motion_free_exact(&pl->collision_arm, radius, &pl->points, NULL,
                                   &pl->mask.lat, a, b, QRT_EXACT_MAX_STEPS,
                                   QRT_WITNESS_AFTER);
 }
@@ -1159,7 +1272,8 @@ double qrt_planner_clearance(const struct qrt_planner *pl,
  * reads. (A negative array size stops the build otherwise.) */
 typedef char
     qrti_block_boxes_fit[(long)QRTI_BLOCK_BOXES * 6L <= QRT_MAX_NODES &&
-                                 QRTI_POINT_BLOCK == QRT_CLEARANCE_BLOCK
+                                 QRTI_POINT_BLOCK == QRT_CLEARANCE_BLOCK &&
+                                 QRTI_BLOCK_GROUP == QRT_CLEARANCE_GROUP
                              ? 1
                              : -1];
 
@@ -1169,6 +1283,7 @@ int qrt_planner_certify_clearance(struct qrt_planner *pl, struct qrt_plan *plan)
     (void)sizeof(qrti_block_boxes_fit);
     if (plan->status != QRT_STATUS_OK || plan->n_waypoints < 1)
         return QRT_E_INVALID;
+    order_points(pl);
     c = qrt_path_clearance(&pl->params.arm, &pl->collision_arm, &pl->points,
                            &pl->mask.lat, pl->search.block_box,
                            (const double(*)[3])plan->waypoints_deg,

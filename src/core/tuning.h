@@ -36,17 +36,36 @@
  * a connection that needs more is refused, never assumed. */
 #define QRT_EXACT_MAX_STEPS 1000
 
+/* --- the sampled fallback (sampled.c) --- */
+
+/* Longest edge a tree grows in one step (joint-space length, degrees):
+ * longer edges cross open space in fewer nodes, shorter ones are proved
+ * in fewer advancement steps and turn more easily into a passage. */
+#define QRT_SAMPLED_STEP_DEG 20.0
+/* The generator's seed: any fixed value makes the fallback a function of
+ * its inputs. */
+#define QRT_SAMPLED_SEED 0x9E3779B97F4A7C15ULL
+
 /* --- conservative advancement (motion.c) --- */
 
 /* Steps after which advancement searches samples of a motion for a
  * colliding one: motions that are often free are mostly proved within a
  * step or two, blocked ones crawl. */
 #define QRT_WITNESS_AFTER 4
+/* Most clearance one advancement step measures where block boxes are
+ * given (metres): a lower cap passes over more blocks whole, and takes
+ * more steps in open space. */
+#ifndef QRT_BOXED_STEP_CAP_M
+#define QRT_BOXED_STEP_CAP_M 0.05
+#endif
 /* Samples of a motion searched for a colliding configuration. */
 #define QRT_WITNESS_SAMPLES 32
 /* Points tested against the clearance box at a time, in float over each
  * axis: whole blocks of a scan are far from the arm. */
 #define QRT_CLEARANCE_BLOCK 64
+/* Blocks whose common box is tried first, passing over them all at once:
+ * in the table's Morton order (order.h) a group is a compact patch. */
+#define QRT_CLEARANCE_GROUP 64
 /* A path's certified clearance (clearance.c) is within half this of the
  * least clearance at the configurations it samples: each step lets the
  * arm move at most this much farther than its clearance exceeds the least

@@ -1019,13 +1019,13 @@ int Daemon::run(const RunFlags &flags)
     log(LogLevel::info,
         "arm: links %g,%g,%g m, radii %g,%g,%g m, limits %g..%g %g..%g "
         "%g..%g deg; tool %g m, radius %g m; grid %g deg, margin %g m, "
-        "C-space margin %g deg",
+        "C-space margin %g deg, sampled fallback %ld draws",
         arm.link_m[0], arm.link_m[1], arm.link_m[2], arm.link_radius_m[0],
         arm.link_radius_m[1], arm.link_radius_m[2], arm.limit_deg[0][0],
         arm.limit_deg[0][1], arm.limit_deg[1][0], arm.limit_deg[1][1],
         arm.limit_deg[2][0], arm.limit_deg[2][1], arm.tool_m, arm.tool_radius_m,
         opts_.params.grid_deg, opts_.params.margin_m,
-        opts_.params.cspace_margin_deg);
+        opts_.params.cspace_margin_deg, opts_.params.sample_draws);
     if (!start_auth())
         return 2;
     if (!opts_.can_iface.empty()) {

@@ -72,6 +72,9 @@ const char *kUsage =
     "  --margin M               workspace margin, metres (0.01)\n"
     "  --cspace-margin DEG      C-space margin (paper Eq. 12), degrees (0)\n"
     "  --grid DEG               lattice spacing, degrees (5)\n"
+    "  --sample-draws N         random configurations the sampled fallback\n"
+    "                           may draw where the lattice has no path\n"
+    "                           (2000; 0: the lattice's answer alone)\n"
     "  --links L1,L2,L3         the arm's link lengths, metres\n"
     "                           (docs/spec.md section Arm: 0.09,0.332,0.538)\n"
     "  --link-radius M[,M2,M3]  the links' radii, metres: one for every\n"
@@ -239,6 +242,10 @@ bool apply(Options *o, const std::string &key, const std::string &value,
         if (!number(0, 20))
             return bad("degrees in 0..20");
         o->params.cspace_margin_deg = v;
+    } else if (key == "sample-draws") {
+        if (!number(0, QRT_SAMPLE_DRAWS_MAX) || v != std::floor(v))
+            return bad("a count in 0..1000000");
+        o->params.sample_draws = long(v);
     } else if (key == "grid") {
         if (!number(QRT_GRID_DEG_MIN, 20))
             return bad("degrees (a divisor of 20 at least the build's)");

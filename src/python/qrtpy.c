@@ -30,6 +30,7 @@ struct qrtpy_params {
     double grid_deg;
     long use_astar;
     long simplify;
+    long sample_draws;
 };
 
 struct qrtpy_target {
@@ -47,6 +48,7 @@ struct qrtpy_result {
     double start_deg[3], goal_deg[3];
     long start_facing, start_elbow, goal_facing, goal_elbow;
     long start_node, goal_node, lattice_path_nodes, nodes_expanded;
+    long sampled_nodes;
     long cells_blocked, points, points_ignored, points_dropped;
     double voxel_m;
     long end_free, end_measured;
@@ -106,6 +108,7 @@ static void params_in(const struct qrtpy_params *p, struct qrt_params *prm)
     prm->grid_deg = p->grid_deg;
     prm->use_astar = (int)p->use_astar;
     prm->simplify = (int)p->simplify;
+    prm->sample_draws = p->sample_draws;
 }
 
 /* The core's defaults (qrt_params_default). */
@@ -119,6 +122,7 @@ void qrtpy_params_default(struct qrtpy_params *p)
     p->grid_deg = prm.grid_deg;
     p->use_astar = prm.use_astar;
     p->simplify = prm.simplify;
+    p->sample_draws = prm.sample_draws;
 }
 
 struct qrtpy_planner {
@@ -255,6 +259,7 @@ int qrtpy_plan(void *handle, const double *xyz, long n,
     r->goal_node = plan.goal_node;
     r->lattice_path_nodes = plan.lattice_path_nodes;
     r->nodes_expanded = plan.nodes_expanded;
+    r->sampled_nodes = plan.sampled_nodes;
     r->cells_blocked = plan.cells_blocked;
     r->points = plan.points;
     r->points_ignored = plan.points_ignored;

@@ -272,11 +272,12 @@ def test_the_log_says_what_the_daemon_made_of_its_options(daemon):
                   "--can", "qrt_no_such_bus", "--can-nodes", "4,5,6",
                   "--counts-per-deg", "1000,2000,-500", "--speed", "40,10,20",
                   "--accel", "80,20,40", "--offset-counts", "5000,-20000,7",
-                  keys=[("op", "operator")])
+                  "--sample-draws", "750", keys=[("op", "operator")])
     arm = ("arm: links 0.1,0.4,0.45 m, radii 0.03,0.025,0.02 m, limits "
            "-180..180 -10..170 -150..130 deg")
     text = d.wait_text(arm)
     assert arm in text, text
+    assert "sampled fallback 750 draws" in text, text
     assert ("CAN qrt_no_such_bus: nodes 4,5,6, counts/deg 1000,2000,-500, "
             "counts at 0 deg 5000,-20000,7, speed 40,10,20 deg/s, "
             "accel 80,20,40 deg/s^2") in text, text
@@ -523,12 +524,14 @@ def test_help_and_bad_flags():
                        ("--limits-deg", "-180,180,-40,nan,-180,140"),
                        ("--tool-length-m", "-0.1"), ("--tool-length-m", "nan"),
                        ("--tool-length-m", "11"), ("--tool-radius-m", "0.6"),
-                       ("--tool-radius-m", "-1")):
+                       ("--tool-radius-m", "-1"), ("--sample-draws", "-1"),
+                       ("--sample-draws", "1000001"),
+                       ("--sample-draws", "2.5")):
         r = subprocess.run([DAEMON, key, value, "--help"], capture_output=True,
                            text=True)
         assert r.returncode == 2 and key[2:] + ":" in r.stderr, (key, r.stderr)
     r = subprocess.run([DAEMON, "--status-channel", "MY_STATUS-2/x:y",
-                        "--max-returns", "7", "--help"],
+                        "--max-returns", "7", "--sample-draws", "0", "--help"],
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     # one way to say "no tool": a radius needs a length

@@ -185,6 +185,9 @@ int main(void)
         qrt_params_default(&prm);
         prm.grid_deg = 10.0;
         prm.simplify = 0; /* always search: no straight motion first */
+        /* the lattice's own answer: the mask is painted by hand over no
+         * points, which the sampled fallback would rightly cross */
+        prm.sample_draws = 0;
         CHECK(qrt_planner_init(&pl, &prm) == QRT_OK, "init");
         CHECK(qrt_planner_build_mask(&pl) == QRT_OK, "empty mask");
         lat = &pl.mask.lat;

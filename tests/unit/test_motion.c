@@ -11,6 +11,7 @@
 #include "stored_points.h"
 
 static struct qrt_planner pl;
+static float boxes[QRTI_BLOCK_BOXES][6];
 
 static double wrap180(double x)
 {
@@ -196,6 +197,7 @@ int main(void)
         }
         qrt_planner_add_points(&pl, pts, n);
         qrt_planner_build_mask(&pl);
+        qrt_points_block_boxes(&pl.points, boxes);
         for (k = 0; k < 3; k++)
             radius[k] = prm.arm.link_radius_m[k] + prm.margin_m;
         for (i = 0; i < 200; i++) {
@@ -233,15 +235,25 @@ int main(void)
                       ref_clearance(q, pts, n, radius));
                 collided_at += hit;
             }
-            /* the witness search after 4 steps (joins) or first (paths) */
-            if (i % 4 == 0 &&
-                qrt_motion_free_exact(&prm.arm, pl.radius_m, &pl.points,
-                                      &pl.mask.lat, a, b, 1000,
-                                      i % 8 == 0 ? QRT_WITNESS_AFTER : 0)) {
-                double c = motion_clearance(a, b, pts, n, radius);
-                accepted_exact++;
-                CHECK(c >= 0.0, "advancement accepted a colliding motion: %g",
-                      c);
+            /* the witness search after 4 steps (joins) or first (paths);
+             * block boxes change how fast, never the answer */
+            if (i % 4 == 0) {
+                int witness = i % 8 == 0 ? QRT_WITNESS_AFTER : 0;
+                int plain = qrt_motion_free_exact(
+                        &prm.arm, pl.radius_m, &pl.points, NULL, &pl.mask.lat,
+                        a, b, 1000, witness),
+                    boxed = qrt_motion_free_exact(
+                        &prm.arm, pl.radius_m, &pl.points,
+                        (const float(*)[6])boxes, &pl.mask.lat, a, b, 1000,
+                        witness);
+                CHECK(plain == boxed, "with block boxes %d, without %d", boxed,
+                      plain);
+                if (plain) {
+                    double c = motion_clearance(a, b, pts, n, radius);
+                    accepted_exact++;
+                    CHECK(c >= 0.0,
+                          "advancement accepted a colliding motion: %g", c);
+                }
             }
         }
     }
