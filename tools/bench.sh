@@ -33,6 +33,10 @@ if [ -x build/bin/qrtpland ]; then
         --out "$out" | tee -a "$out/table5.txt"
 fi
 
+# the dense confined family beside the same scenes thinned to 10^4 points:
+# time, path length, and the thinned paths checked against the dense points
+.venv/bin/python tools/bench_dense.py --out "$out" | tail -1 | tee -a "$out/table5.txt"
+
 # the Python package's overhead over its C call (issue 38), 10 x 1444
 .venv/bin/python tools/bench_python.py --out "$out" | tee -a "$out/table5.txt"
 
