@@ -28,15 +28,7 @@ static double sample(const struct qrt_arm *arm, const struct qrt_points *pts,
                      const float (*block_box)[6], const double q[3], double cap)
 {
     double p[QRT_CHAIN_MAX + 1][3], radius[QRT_CHAIN_MAX], c = cap;
-    int k, n = 3;
-    qrt_arm_fk(arm, q, p);
-    for (k = 0; k < 3; k++)
-        radius[k] = arm->link_radius_m[k];
-    if (arm->tool_m > 0.0) {
-        qrt_arm_tool_tip(arm, q, p[4]);
-        radius[3] = arm->tool_radius_m;
-        n = 4;
-    }
+    int k, n = qrt_arm_capsules(arm, q, 0.0, p, radius);
     if (pts->far_min2 < QRT_NO_FAR_POINT) {
         double far = sqrt(pts->far_min2), widest = 0.0;
         for (k = 0; k < n; k++)

@@ -337,6 +337,21 @@ double qrt_chain_clearance_capped(const double (*p)[3], const double *radius_m,
     return best;
 }
 
+int qrt_arm_capsules(const struct qrt_arm *arm, const double q_deg[3],
+                     double extra_m, double (*p)[3], double *radius_m)
+{
+    int k, n = 3;
+    qrt_arm_fk(arm, q_deg, p);
+    for (k = 0; k < 3; k++)
+        radius_m[k] = arm->link_radius_m[k] + extra_m;
+    if (arm->tool_m > 0.0) {
+        qrt_arm_tool_tip(arm, q_deg, p[4]);
+        radius_m[3] = arm->tool_radius_m + extra_m;
+        n = 4;
+    }
+    return n;
+}
+
 double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],
                             const struct qrt_points *pts, const double q_deg[3],
                             double cap)

@@ -64,6 +64,12 @@ double qrt_clearance(const struct qrt_arm *arm, const double radius_m[3],
  * and the tool after them). */
 #define QRT_CHAIN_MAX 4
 
+/* The arm's own capsules at q_deg as a chain (its three links, then its
+ * tool when it has one): their ends p[0..n] and radii radius_m[0..n-1],
+ * each the capsule's radius plus extra_m. Returns n (3 or 4). */
+int qrt_arm_capsules(const struct qrt_arm *arm, const double q_deg[3],
+                     double extra_m, double (*p)[3], double *radius_m);
+
 /* min(clearance, cap) of the chain of n <= QRT_CHAIN_MAX capsules p[0..n]
  * with radii radius_m[0..n-1] against the points (distance minus radius,
  * metres; points farther than cap from every capsule are skipped); where

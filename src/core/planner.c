@@ -359,38 +359,6 @@ enum end_outcome {
     END_STRANDED
 };
 
-/* The clearance of the tool's capsule (the segment from Pe to the tip,
- * radius tool_radius) at q from the n points xyz, or from the table's
- * points when xyz is NULL; 1e30 without a tool or points. */
-static double tool_clearance(const struct qrt_planner *pl, const double q[3],
-                             double tool_radius, const double *xyz, long n)
-{
-    const struct qrt_arm *arm = &pl->params.arm;
-    struct qrt_point_axes ax = qrt_points_axes(&pl->points);
-    double p[4][3], tip[3], best = 1e30;
-    long i;
-    if (arm->tool_m <= 0.0)
-        return best;
-    if (xyz == NULL)
-        n = pl->points.count;
-    qrt_arm_fk(arm, q, p);
-    qrt_arm_tool_tip(arm, q, tip);
-    for (i = 0; i < n; i++) {
-        double x[3], c;
-        if (xyz == NULL) {
-            qrt_point_at(&ax, i, x);
-        } else {
-            x[0] = xyz[3 * i];
-            x[1] = xyz[3 * i + 1];
-            x[2] = xyz[3 * i + 2];
-        }
-        c = sqrt(qrt_seg_dist2(x, p[3], tip)) - tool_radius;
-        if (c < best)
-            best = c;
-    }
-    return best;
-}
-
 /* The clearance of q by the rule itself (the links' and the tool's own
  * capsules, not the collision arm's), from the table's exact points (the
  * caller checks that they are exact): each radius less the float rounding
@@ -399,16 +367,13 @@ static double tool_clearance(const struct qrt_planner *pl, const double q[3],
  * it. */
 static double exact_clearance(const struct qrt_planner *pl, const double q[3])
 {
-    double radius[3], rounding = qrt_points_inflation_m(&pl->points), c, t;
-    int k;
-    for (k = 0; k < 3; k++)
-        radius[k] =
-            pl->params.arm.link_radius_m[k] + pl->params.margin_m - rounding;
-    c = qrt_clearance(&pl->params.arm, radius, &pl->points, q);
-    t = tool_clearance(
-        pl, q, pl->params.arm.tool_radius_m + pl->params.margin_m - rounding,
-        NULL, 0);
-    return (t < c ? t : c) - rounding;
+    double p[QRT_CHAIN_MAX + 1][3], radius[QRT_CHAIN_MAX],
+        rounding = qrt_points_inflation_m(&pl->points);
+    int n = qrt_arm_capsules(&pl->params.arm, q, pl->params.margin_m - rounding,
+                             p, radius);
+    return qrt_chain_clearance_capped((const double(*)[3])p, radius, n,
+                                      &pl->points, NULL, 1e30) -
+           rounding;
 }
 
 /* The joints a start or goal may take, nearest to ref first, with the IK
@@ -1246,24 +1211,17 @@ int qrt_planner_check_path_now(struct qrt_planner *pl,
 double qrt_planner_clearance(const struct qrt_planner *pl,
                              const double q_deg[3], const double *xyz, long n)
 {
-    const struct qrt_arm *arm = &pl->params.arm;
-    double p[4][3], best = 1e30;
+    double p[QRT_CHAIN_MAX + 1][3], radius[QRT_CHAIN_MAX], best = 1e30;
     long i;
-    int k;
-    qrt_arm_fk(arm, q_deg, p);
+    int k, capsules = qrt_arm_capsules(&pl->params.arm, q_deg,
+                                       pl->params.margin_m, p, radius);
     for (i = 0; i < n; i++)
-        for (k = 0; k < 3; k++) {
-            double c = sqrt(qrt_seg_dist2(xyz + 3 * i, p[k], p[k + 1])) -
-                       arm->link_radius_m[k] - pl->params.margin_m;
+        for (k = 0; k < capsules; k++) {
+            double c =
+                sqrt(qrt_seg_dist2(xyz + 3 * i, p[k], p[k + 1])) - radius[k];
             if (c < best)
                 best = c;
         }
-    {
-        double t = tool_clearance(
-            pl, q_deg, arm->tool_radius_m + pl->params.margin_m, xyz, n);
-        if (t < best)
-            best = t;
-    }
     return best;
 }
 
