@@ -10,22 +10,18 @@
 
 #include "../../firmware_sim/drive.h"
 #include "../unit/check.h"
+#include "mem_bus.h"
 #include "qrtcan/emcy.h"
 #include "qrtcan/master.h"
 #include "qrtcan/sdo.h"
 
-#define BUS_MAX 4096
 #define STEP_US 250u
 
-static struct qrtcan_frame bus[BUS_MAX];
-static int bus_count;
-static uint64_t clock_us = 1000;
 static struct drive drives[3];
 static struct qrtcan_master m;
 static double worst_off_line; /* degrees from the planned segment */
 static int torque_dropped;    /* a drive passed Switch On Disabled */
-static unsigned long frames_lost;
-static double peak_speed[3]; /* degrees a second, as the drives moved */
+static double peak_speed[3];  /* degrees a second, as the drives moved */
 
 /* What the master put on the bus, as step() delivers it */
 #define MASTER_HB_ID (QRTCAN_FN_HEARTBEAT + 127u)
@@ -108,33 +104,6 @@ static int find_nmt(unsigned node)
             return i;
     return -1;
 }
-
-static int mem_send(void *ctx, const struct qrtcan_frame *f)
-{
-    (void)ctx;
-    if (bus_count == BUS_MAX) {
-        frames_lost++;
-        return -1;
-    }
-    bus[bus_count++] = *f;
-    return 0;
-}
-
-static int mem_receive(void *ctx, struct qrtcan_frame *f, uint32_t timeout)
-{
-    (void)ctx;
-    (void)f;
-    (void)timeout;
-    return 0;
-}
-
-static uint64_t mem_now(void *ctx)
-{
-    (void)ctx;
-    return clock_us;
-}
-
-static const struct can_driver can = {NULL, mem_send, mem_receive, mem_now};
 
 static double drive_deg(int j)
 {
