@@ -21,15 +21,30 @@ static double next_uniform(uint64_t *state)
            (1.0 / 9007199254740992.0);
 }
 
-static void random_configuration(const struct qrt_lattice *lat, uint64_t *state,
-                                 double q[3])
+/* q clamped into the arm's joint limits (alpha's none where it wraps):
+ * a step between two configurations inside them, or a draw, may land an
+ * ulp outside by rounding. */
+static void clamp_to_limits(const struct qrt_sampled_space *sp, double q[3])
+{
+    int j;
+    for (j = sp->lat->alpha_wraps ? 1 : 0; j < 3; j++) {
+        if (q[j] < sp->arm->limit_deg[j][0])
+            q[j] = sp->arm->limit_deg[j][0];
+        if (q[j] > sp->arm->limit_deg[j][1])
+            q[j] = sp->arm->limit_deg[j][1];
+    }
+}
+
+/* A configuration uniform within the joint limits. */
+static void random_configuration(const struct qrt_sampled_space *sp,
+                                 uint64_t *state, double q[3])
 {
     int j;
     for (j = 0; j < 3; j++) {
-        /* alpha's last node is its first again where it wraps */
-        int cells = lat->n[j] - ((j == 0 && lat->alpha_wraps) ? 0 : 1);
-        q[j] = lat->lo_deg[j] + next_uniform(state) * cells * lat->grid_deg;
+        double lo = sp->arm->limit_deg[j][0], hi = sp->arm->limit_deg[j][1];
+        q[j] = lo + next_uniform(state) * (hi - lo);
     }
+    clamp_to_limits(sp, q);
 }
 
 static double distance2(const struct qrt_lattice *lat, const double a[3],
@@ -87,6 +102,7 @@ static enum grow grow_towards(const struct qrt_sampled_space *sp,
             q[j] = sp->node[near].q_deg[j] + s * d[j];
         if (sp->lat->alpha_wraps)
             q[0] = qrt_wrap_deg(q[0]);
+        clamp_to_limits(sp, q);
     }
     if (!qrt_sampled_motion_free(sp, sp->node[near].q_deg, q))
         return TRAPPED;
@@ -147,7 +163,7 @@ int32_t qrt_sampled_connect(const struct qrt_sampled_space *sp,
             for (j = 0; j < 3; j++)
                 x[j] = qg[j];
         else
-            random_configuration(sp->lat, &state, x);
+            random_configuration(sp, &state, x);
         if (grow_towards(sp, &count, tree, x, &made) != TRAPPED) {
             /* the other tree reaches for the new node until it gets there
              * or is stopped (each step adds a node, so the table bounds

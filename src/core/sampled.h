@@ -21,7 +21,7 @@
 
 /* What the trees are proved against, and the caller's scratch. */
 struct qrt_sampled_space {
-    const struct qrt_arm *arm; /* the collision arm */
+    const struct qrt_arm *arm; /* the collision arm (and the limits) */
     double radius_m[3];        /* its collision radii */
     const struct qrt_points *pts;
     const float (*block_box)[6];    /* the table's qrt_points_block_boxes */
