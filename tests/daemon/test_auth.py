@@ -296,6 +296,9 @@ def test_the_example_client_prints_a_plan(daemon, tmp_path):
                            "examples", "plan_client.py")
 
     def run_example(key, wait):
+        for _ in range(3):  # a scan before the request (as the sender tool's)
+            c.publish("QRT_SCAN", scan_from_points(pts))
+            c.pump(0.1)
         tool = subprocess.Popen(
             [os.sys.executable, example, "--key", key, "--lcm-url", d.url,
              "--start", "-100", "0", "0", "--goal", "100", "0", "0",
