@@ -255,8 +255,8 @@ static void check_kept_clusters(void)
         k = qrt_planner_check_path_now(&certified, (const double(*)[3])wp, 3,
                                        &first_a);
         CHECK(k == QRT_OK &&
-                  qrt_planner_check_path_now(&fresh, (const double(*)[3])wp,
-                                             3, &first_b) == QRT_OK,
+                  qrt_planner_check_path_now(&fresh, (const double(*)[3])wp, 3,
+                                             &first_b) == QRT_OK,
               "check");
         CHECK(first_a == first_b, "trial %ld: first blocked %d, unordered %d",
               trial, first_a, first_b);
