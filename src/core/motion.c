@@ -352,14 +352,25 @@ int qrt_arm_capsules(const struct qrt_arm *arm, const double q_deg[3],
     return n;
 }
 
+/* qrt_clearance_capped, passing over the blocks of block_box (or none,
+ * NULL) that lie out of reach. */
+static double clearance_boxed(const struct qrt_arm *arm,
+                              const double radius_m[3],
+                              const struct qrt_points *pts,
+                              const float (*block_box)[6], const double q[3],
+                              double cap)
+{
+    double p[4][3];
+    qrt_arm_fk(arm, q, p);
+    return qrt_chain_clearance_capped((const double(*)[3])p, radius_m, 3, pts,
+                                      block_box, cap);
+}
+
 double qrt_clearance_capped(const struct qrt_arm *arm, const double radius_m[3],
                             const struct qrt_points *pts, const double q_deg[3],
                             double cap)
 {
-    double p[4][3];
-    qrt_arm_fk(arm, q_deg, p);
-    return qrt_chain_clearance_capped((const double(*)[3])p, radius_m, 3, pts,
-                                      NULL, cap);
+    return clearance_boxed(arm, radius_m, pts, NULL, q_deg, cap);
 }
 
 double qrt_clearance(const struct qrt_arm *arm, const double radius_m[3],
@@ -374,18 +385,6 @@ double qrt_clearance(const struct qrt_arm *arm, const double radius_m[3],
  * samples, taken coarse to fine (the far end first, then the middle, the
  * quarters, ...), decides the motion. Advancement could never have passed
  * a colliding configuration, so the answer is the same, only sooner. */
-
-static double clearance_boxed(const struct qrt_arm *arm,
-                              const double radius_m[3],
-                              const struct qrt_points *pts,
-                              const float (*block_box)[6], const double q[3],
-                              double cap)
-{
-    double p[4][3];
-    qrt_arm_fk(arm, q, p);
-    return qrt_chain_clearance_capped((const double(*)[3])p, radius_m, 3, pts,
-                                      block_box, cap);
-}
 
 static int has_witness(const struct qrt_arm *arm, const double radius_m[3],
                        const struct qrt_points *pts,
