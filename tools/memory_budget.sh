@@ -13,8 +13,8 @@
 # Profiles: "paper" is the 5 degree lattice with 16384 exact points, the
 # CMake board profile's settings (Cortex-A boards); "small" is a 10 degree
 # lattice with 1024 exact points, whose state and stack fit a Cortex-M7's
-# 512 KiB of SRAM; "host" is the CMake host profile's, 2^18 exact points,
-# for the robot computer's programs (x86-64 and aarch64 only: no board
+# 512 KiB of SRAM; "host" is the CMake host profile's (its exact points read
+# from CMakeLists.txt, 2^19 now), for the robot computer's programs (x86-64 and aarch64 only: no board
 # holds its state).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -25,7 +25,9 @@ mkdir -p "$top"
 targets=("x86-64:" "armhf:cmake/toolchains/arm-linux-gnueabihf.cmake"
          "aarch64:cmake/toolchains/aarch64-linux-gnu.cmake"
          "cortex-m7:cmake/toolchains/cortex-m7.cmake")
-profiles=("paper:5:16384:board" "small:10:1024:board" "host:5:262144:host")
+host_points=$(sed -n '/QRT_PROFILE_USED STREQUAL "host"/,/endif/ s/.*set(QRT_PROFILE_MAX_POINTS \([0-9]*\)).*/\1/p' CMakeLists.txt)
+[ -n "$host_points" ] || { echo "host profile's points not found in CMakeLists.txt" >&2; exit 1; }
+profiles=("paper:5:16384:board" "small:10:1024:board" "host:5:$host_points:host")
 sram=$((512 * 1024))
 
 tool_for() { # target tool -> the target's binutils program

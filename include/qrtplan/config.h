@@ -25,7 +25,7 @@
  * re-quantised onto a coarser voxel grid (see points.h) rather than
  * overflowing; only when even the coarsest voxels do not fit are points
  * dropped, and the plan then says so. This default is the board's; CMake's
- * host profile (a full build) sets 262144 (docs/embedded.md, Profiles). */
+ * host profile (a full build) sets 524288 (docs/embedded.md, Profiles). */
 #ifndef QRT_MAX_POINTS
 #define QRT_MAX_POINTS 16384
 #endif

@@ -55,9 +55,9 @@ static const char overview[] =
 #define MAX_MEMORY_HELP                                                        \
     "  --max-memory BYTES  the most memory it may hold (default 1G = 1 GiB;\n" \
     "                    bytes, or with K, M or G, powers of 1024; at least\n" \
-    "                    16M, 24M in a host build): the planner's state\n"     \
-    "                    (~4 MB, ~16 MB in a host build, whose --version\n"    \
-    "                    says 262144 points) and 8 MiB for the program,\n"     \
+    "                    16M, 36M in a host build): the planner's state\n"     \
+    "                    (~4 MB, ~28 MB in a host build, whose --version\n"    \
+    "                    says 524288 points) and 8 MiB for the program,\n"     \
     "                    then every buffer it allocates to read the scene,\n"  \
     "                    counted before it is made: the JSON text (at most\n"  \
     "                    1 GiB), its tree without the points array (~50 B\n"   \
@@ -235,7 +235,7 @@ static int close_output(FILE *f, const char *path)
     return bad ? fail(path ? path : "stdout", "write failed") : 0;
 }
 
-/* The planner state (3.9 MiB in the board profile, 15 MiB in the host
+/* The planner state (3.9 MiB in the board profile, 26.5 MiB in the host
  * profile's, docs/embedded.md): static, as on a board. */
 static struct qrt_planner planner;
 

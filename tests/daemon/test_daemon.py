@@ -363,7 +363,7 @@ def test_a_scan_beyond_capacity_says_what_was_dropped(daemon):
     # 250,000 returns (3 MB: as much as one UDP multicast message gets
     # through a 4 MiB receive buffer) filling the arm's whole reach: far more
     # than a board's exact table (16,384), though within the host profile's
-    # (2^18, docs/embedded.md), which keeps them exact. Beyond the table the
+    # (2^19, docs/embedded.md), which keeps them exact. Beyond the table the
     # core merges them into voxels (conservatively grown) and the plan says
     # at which size; at 64 mm the whole reach fits the table, so nothing is
     # dropped, and a drop would have to say `capacity`. Returns beyond the arm's reach (the

@@ -1,6 +1,7 @@
 """Shared fixtures: the qrtplan binary and a helper that plans a scene."""
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -24,6 +25,15 @@ def qrtplan():
 def run_cli(args, timeout=120):
     return subprocess.run([str(BIN), *map(str, args)], capture_output=True,
                           text=True, timeout=timeout)
+
+
+def max_points():
+    """QRT_MAX_POINTS of this build (the exact table's size), as `qrtplan
+    --version` prints it."""
+    r = run_cli(["--version"])
+    m = re.search(r"(\d+) points exact", r.stdout)
+    assert r.returncode == 0 and m, r.stdout
+    return int(m.group(1))
 
 
 def plan_scene(scene, directory, *flags, name="scene"):

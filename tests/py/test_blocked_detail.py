@@ -13,24 +13,16 @@ collides; with one point put inside the margin it must say it collides.
 The exact clearance is checked with tools/oracle.py, which shares no code
 with the planner."""
 import json
-import re
 import struct
 
 import numpy as np
 import pytest
 
 import oracle
-from conftest import run_cli
+from conftest import max_points, run_cli
 
 FACE_Y = 0.045  # the slabs' inner faces: 45 mm from the arm's axis
 CLEAR_M = FACE_Y - 0.02 - 0.01  # beyond radius and margin: 15 mm
-
-
-def max_points():
-    r = run_cli(["--version"])
-    m = re.search(r"(\d+) points exact", r.stdout)
-    assert r.returncode == 0 and m, r.stdout
-    return int(m.group(1))
 
 
 def write_pcd(path, pts):
@@ -64,11 +56,11 @@ def slot_points(n, hole=False):
 def slot(tmp_path_factory):
     d = tmp_path_factory.mktemp("slot")
     # enough that even 16 mm voxels overflow the table: 32 mm ones hold it
-    pts = slot_points(max(46000, int(2.3 * max_points())))
+    pts = slot_points(max(46000, int(4 * max_points())))
     write_pcd(d / "slot.pcd", pts)
     # with room round the arm straight up: over 0.1 m from every point
     write_pcd(d / "hole.pcd",
-              slot_points(max(46000, int(2.3 * max_points())), hole=True))
+              slot_points(max(46000, int(4 * max_points())), hole=True))
     return d, pts
 
 

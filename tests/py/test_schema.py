@@ -13,7 +13,7 @@ import jsonschema
 import numpy as np
 import pytest
 
-from conftest import ROOT, run_cli
+from conftest import ROOT, max_points, run_cli
 
 SCHEMAS = ROOT / "docs" / "schema"
 SCENES = sorted((ROOT / "scenes").glob("*.json"))
@@ -100,11 +100,12 @@ def walled_in():
 
 
 def capacity_cloud(path):
-    """65^3 points, one in each 64 mm voxel (the coarsest): more than the
-    262,144 of the host profile's table holds even as voxels (and the
-    board's 16,384). Binary PCD, float32; the arm's 3 m links reach them
-    all."""
-    i = np.arange(65) - 32.5
+    """One point in each 64 mm voxel (the coarsest) of a cube of k^3 of
+    them, k^3 more than this build's table holds even as voxels (524,288 in
+    the host profile, 16,384 in the board's). Binary PCD, float32; the
+    arm's 3 m links reach them all (k is 83 in the host profile: 5.3 m)."""
+    k = round(max_points() ** (1 / 3)) + 2
+    i = np.arange(k) - k / 2
     xyz = (np.stack(np.meshgrid(i, i, i, indexing="ij"), -1).reshape(-1, 3)
            * 0.064).astype(np.float32)
     n = len(xyz)
