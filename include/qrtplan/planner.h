@@ -240,7 +240,10 @@ int qrt_planner_check_path(const struct qrt_planner *pl,
 /* The same question asked of the points now in the table, before any mask
  * is built for them: builds only the mask rows the path's motions pass
  * through and answers with the same certificate, so a replan can stop the
- * arm long before the whole mask is ready. The mask is left partial:
+ * arm long before the whole mask is ready. A segment that needs
+ * advancement (a sampled path, a join to the lattice) puts the table in
+ * Morton order first, as the certificate does, so that far blocks are
+ * passed over whole; the answer is the same. The mask is left partial:
  * qrt_planner_plan and qrt_planner_check_path refuse it (QRT_E_INVALID)
  * until the next qrt_planner_build_mask. Same return codes as
  * qrt_planner_check_path, without the mask's. */

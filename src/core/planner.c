@@ -1109,28 +1109,72 @@ static int check_waypoints(const struct qrt_planner *pl,
     return QRT_OK;
 }
 
-/* Is the motion a -> b proved free neither on the mask (every row the walk
- * looks at must be built) nor against the points? Where the mask walk
- * fails, the motion most often collides: that configuration and the end
- * of the motion (a new obstacle on the goal) are asked first, a clearance
- * each, before advancement (whose witness search waits
- * QRT_WITNESS_AFTER steps: a path's first and last segments are often
- * connections that only advancement proves, in a step or two). */
-static int segment_blocked(const struct qrt_planner *pl, const double a[3],
-                           const double b[3])
+/* What the quick tests say of the motion a -> b: free on the mask (every
+ * row the walk looks at must be built), blocked, or neither (advancement
+ * against the points must decide). Where the mask walk fails, the motion
+ * most often collides: that configuration and the end of the motion (a
+ * new obstacle on the goal) are asked first, a clearance each, before
+ * advancement (whose witness search waits QRT_WITNESS_AFTER steps: a
+ * path's first and last segments are often connections that only
+ * advancement proves, in a step or two). */
+enum segment_verdict { SEGMENT_FREE, SEGMENT_BLOCKED, SEGMENT_UNDECIDED };
+
+static enum segment_verdict segment_quick(const struct qrt_planner *pl,
+                                          const double a[3], const double b[3])
 {
     double radius[3], t_hit;
     if (qrt_motion_free_on_mask_hit(&pl->mask, a, b, &t_hit))
-        return 0;
+        return SEGMENT_FREE;
     exact_radii(pl, radius);
     if (qrt_motion_collides_at(&pl->collision_arm, radius, &pl->points,
                                &pl->mask.lat, a, b, t_hit) ||
         qrt_motion_collides_at(&pl->collision_arm, radius, &pl->points,
                                &pl->mask.lat, a, b, 1.0))
-        return 1;
-    return !qrt_motion_free_exact(&pl->collision_arm, radius, &pl->points, NULL,
-                                  &pl->mask.lat, a, b, QRT_EXACT_MAX_STEPS,
-                                  QRT_WITNESS_AFTER);
+        return SEGMENT_BLOCKED;
+    return SEGMENT_UNDECIDED;
+}
+
+/* Does advancement against the points (over block_box's blocks, or
+ * NULL) fail to prove the motion a -> b free? */
+static int advancement_fails(const struct qrt_planner *pl, const double a[3],
+                             const double b[3], const float (*block_box)[6])
+{
+    double radius[3];
+    exact_radii(pl, radius);
+    return !qrt_motion_free_exact(&pl->collision_arm, radius, &pl->points,
+                                  block_box, &pl->mask.lat, a, b,
+                                  QRT_EXACT_MAX_STEPS, QRT_WITNESS_AFTER);
+}
+
+/* Is the motion a -> b proved free neither by the quick tests nor by
+ * advancement? */
+static int segment_blocked(const struct qrt_planner *pl, const double a[3],
+                           const double b[3])
+{
+    enum segment_verdict v = segment_quick(pl, a, b);
+    if (v != SEGMENT_UNDECIDED)
+        return v == SEGMENT_BLOCKED;
+    return advancement_fails(pl, a, b, NULL);
+}
+
+/* segment_blocked for qrt_planner_check_path_now, whose path may run near
+ * points for long (a sampled path, a join to the lattice): the first time
+ * one of its segments needs advancement, the table is put in Morton order
+ * and its block boxes made (*boxed then 1), so that advancement passes
+ * far blocks over whole, as the sampled fallback's proofs do. The search
+ * scratch that holds them is idle in this call. */
+static int segment_blocked_now(struct qrt_planner *pl, const double a[3],
+                               const double b[3], int *boxed)
+{
+    enum segment_verdict v = segment_quick(pl, a, b);
+    if (v != SEGMENT_UNDECIDED)
+        return v == SEGMENT_BLOCKED;
+    if (!*boxed) {
+        order_points(pl);
+        qrt_points_block_boxes(&pl->points, pl->search.block_box);
+        *boxed = 1;
+    }
+    return advancement_fails(pl, a, b, (const float(*)[6])pl->search.block_box);
 }
 
 /* The first segment segment_blocked finds, or -1. */
@@ -1170,13 +1214,14 @@ static int check_segments_lazily(struct qrt_planner *pl,
                                  int *first_blocked)
 {
     struct qrt_raster r;
-    int i;
+    int i, boxed = 0;
     if (!lazy_start(pl, &r))
         return 0;
     for (i = 0; i + 1 < n; i++) {
         mark_rows_along(pl, waypoints_deg + i, 2);
         qrt_lazy_build_rows(pl, pl->check_rows);
-        if (segment_blocked(pl, waypoints_deg[i], waypoints_deg[i + 1])) {
+        if (segment_blocked_now(pl, waypoints_deg[i], waypoints_deg[i + 1],
+                                &boxed)) {
             *first_blocked = i;
             break;
         }
@@ -1189,7 +1234,7 @@ int qrt_planner_check_path_now(struct qrt_planner *pl,
                                const double (*waypoints_deg)[3], int n,
                                int *first_blocked)
 {
-    int rc;
+    int rc, i, boxed = 0;
     *first_blocked = -1;
     rc = check_waypoints(pl, waypoints_deg, n);
     if (rc != QRT_OK)
@@ -1204,7 +1249,12 @@ int qrt_planner_check_path_now(struct qrt_planner *pl,
     /* the clusters do not fit: the whole path's rows in one pass */
     mark_rows_along(pl, waypoints_deg, n);
     raster_part(pl, 0, 1, pl->check_rows);
-    *first_blocked = first_blocked_segment(pl, waypoints_deg, n);
+    for (i = 0; i + 1 < n; i++)
+        if (segment_blocked_now(pl, waypoints_deg[i], waypoints_deg[i + 1],
+                                &boxed)) {
+            *first_blocked = i;
+            break;
+        }
     return QRT_OK;
 }
 
